@@ -1,0 +1,31 @@
+// The subcommands, as plain functions over option structs. main.cpp (the only file that
+// sees CLI11) fills the structs; each command returns an exit code or throws mebake::Error.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/mesh_stream.h"
+
+namespace mebake::app {
+
+struct InfoOptions {
+    std::string input;                       // mesh path, "-" or a bake directory
+    std::optional<io::MeshFormat> format;    // forced format for pipes
+    bool json = false;                       // machine-readable output on stdout
+};
+int RunInfo(const InfoOptions& opt);
+
+struct ConvertOptions {
+    std::string input, output;
+    std::optional<io::MeshFormat> in_format, out_format;
+    bool ascii = false;         // PLY ascii output
+    bool big_endian = false;    // PLY binary big-endian output
+    bool no_normals = false, no_colors = false, no_uvs = false;
+    bool float_colors = false;
+    bool force = false;         // overwrite an existing output file
+};
+int RunConvert(const ConvertOptions& opt);
+
+}  // namespace mebake::app

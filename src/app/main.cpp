@@ -1,0 +1,110 @@
+// mebake's command line. This is the only file that includes CLI11 (slow to compile) and
+// the one place where errors become messages and exit codes:
+//   0 success, 1 runtime failure (bad input, I/O), 2 usage error, 130 interrupted.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "io/mesh_format.h"
+
+namespace {
+
+using mebake::io::MeshFormat;
+
+// CLI11 validator/transform for --format.
+std::optional<MeshFormat> ToFormat(const std::string& s) {
+    if (s.empty()) return std::nullopt;
+    auto f = mebake::io::ParseFormatName(s);
+    if (!f) mebake::UsageError("unknown format '{}': expected ply, obj, off or stl", s);
+    return f;
+}
+
+const CLI::Validator kFormatName = CLI::IsMember({"ply", "obj", "off", "stl"}, CLI::ignore_case);
+
+int ExitCode(mebake::ErrorKind kind) {
+    switch (kind) {
+    case mebake::ErrorKind::Usage: return 2;
+    case mebake::ErrorKind::Cancelled: return 130;
+    default: return 1;
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "mebake - bakes global illumination onto huge scanned meshes.\n"
+        "Meshes stream through in bounded memory; '-' reads stdin or writes stdout.",
+        "mebake"};
+    app.set_version_flag("--version", std::string("mebake ") + MEBAKE_VERSION);
+    app.require_subcommand(1);
+    int verbosity = 0;
+    app.add_flag("-v,--verbose", verbosity, "More detail on stderr (repeat for trace)");
+    bool quiet = false;
+    app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+
+    // info
+    mebake::app::InfoOptions info;
+    std::string info_format;
+    auto* info_cmd = app.add_subcommand(
+        "info", "Stream a mesh (or '-') and report counts, bounds, properties, face sizes,\n"
+                "degenerate and zero-area faces, unreferenced vertices and read time.");
+    info_cmd->add_option("input", info.input, "Mesh file (ply, obj, off, stl) or '-' for stdin")
+        ->required();
+    info_cmd->add_option("--format", info_format, "Input format when it cannot be told from a name")
+        ->check(kFormatName);
+    info_cmd->add_flag("--json", info.json, "Print the report as JSON on stdout");
+
+    // convert
+    mebake::app::ConvertOptions conv;
+    std::string conv_in_format, conv_out_format;
+    auto* conv_cmd = app.add_subcommand(
+        "convert", "Stream a mesh from one format to another (ply, obj, off, stl in; ply, obj out).");
+    conv_cmd->add_option("input", conv.input, "Input mesh or '-' for stdin")->required();
+    conv_cmd->add_option("output", conv.output, "Output mesh or '-' for stdout")->required();
+    conv_cmd->add_option("--format", conv_in_format, "Input format (for stdin)")->check(kFormatName);
+    conv_cmd->add_option("--to", conv_out_format, "Output format (for stdout; default ply)")
+        ->check(CLI::IsMember({"ply", "obj"}, CLI::ignore_case));
+    conv_cmd->add_flag("--ascii", conv.ascii, "Write ASCII PLY (default: binary little-endian)");
+    conv_cmd->add_flag("--big-endian", conv.big_endian, "Write binary big-endian PLY");
+    conv_cmd->add_flag("--no-normals", conv.no_normals, "Drop vertex normals");
+    conv_cmd->add_flag("--no-colors", conv.no_colors, "Drop vertex colours");
+    conv_cmd->add_flag("--no-uvs", conv.no_uvs, "Drop vertex texture coordinates");
+    conv_cmd->add_flag("--float-colors", conv.float_colors, "Write PLY colours as float, not uchar");
+    conv_cmd->add_flag("-f,--force", conv.force, "Overwrite an existing output file");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        // Prints the help text (exit 0) or the usage error (exit 2, whatever CLI11's code).
+        return app.exit(e) == 0 ? 0 : 2;
+    }
+
+    mebake::InitLogging(quiet ? -1 : verbosity);
+    try {
+        if (*info_cmd) {
+            info.format = ToFormat(info_format);
+            return mebake::app::RunInfo(info);
+        }
+        if (*conv_cmd) {
+            conv.in_format = ToFormat(conv_in_format);
+            conv.out_format = ToFormat(conv_out_format);
+            return mebake::app::RunConvert(conv);
+        }
+    } catch (const mebake::Error& e) {
+        std::fprintf(stderr, "mebake: error: %s\n", e.what());
+        return ExitCode(e.kind());
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "mebake: error: out of memory (try a smaller --memory budget)\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "mebake: error: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
