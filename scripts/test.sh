@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Builds and runs the whole test suite on a fresh Debian 12 machine:
+#   1. Release build (warnings are errors) and every ctest test: units, end-to-end runs
+#      of the real binary on real data (skipped when ../shared/data is absent).
+#   2. Debug + AddressSanitizer + UndefinedBehaviorSanitizer build with clang, running
+#      the core and I/O unit tests and each reader's libFuzzer target briefly.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+
+bash scripts/install-deps.sh
+
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DMEBAKE_WERROR=ON
+cmake --build build -j"$jobs"
+ctest --test-dir build -j"$jobs" --output-on-failure --timeout 900
+
+CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+  -DMEBAKE_SANITIZE=ON -DMEBAKE_FUZZ=ON -DMEBAKE_BENCH=OFF -DMEBAKE_TEST_MODULES="core;io"
+cmake --build build-asan -j"$jobs" --target sanitize_set
+ctest --test-dir build-asan -j"$jobs" --output-on-failure --timeout 900
