@@ -1,0 +1,71 @@
+// What is lit and by what: materials per face group, emitters and the sky, and the
+// solver settings — from a scene file (JSON, docs/scene-format.md), from the inputs'
+// OBJ/MTL materials (Kd albedo, Ke emission), or from the default rig.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+#include "stream/bake_dir.h"
+
+namespace mebake::solve {
+
+struct Material {
+    std::string name;
+    Vec3f albedo{0.7f, 0.7f, 0.7f};   // diffuse reflectance, linear RGB
+    bool use_vertex_colors = true;     // multiply by the scan's vertex colours if present
+    float color_factor = 1.0f;         // scales vertex colours (sRGB-decoded) into albedo
+    Vec3f emission{0, 0, 0};           // emitted radiance, linear RGB
+    float glossy_exponent = 0;         // Phong-like lobe for display (0: diffuse)
+    float glossy_weight = 0;           // share of reflectance in the glossy lobe
+
+    bool emissive() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
+};
+
+struct PolygonLight {
+    std::vector<Vec3d> vertices;  // planar, counter-clockwise seen from the emitting side
+    Vec3d radiance{0, 0, 0};      // W / (m^2 sr) per channel
+    bool two_sided = false;
+};
+
+struct Sky {
+    enum class Type { None, Uniform, Overcast };
+    Type type = Type::None;
+    Vec3d radiance{0, 0, 0};      // uniform radiance, or zenith radiance for CIE overcast
+    Vec3d up{0, 1, 0};
+};
+
+struct SolverSettings {
+    int order = 2;                // wavelet order M: 0 constant ... 3 cubic
+    double tolerance = 0.02;      // relative error that triggers subdivision
+    int max_bounces = 16;         // batches of shooting after the direct pass
+    double stop_fraction = 1e-3;  // stop when unshot power < this x emitted power
+    double time_limit = 0;        // seconds; 0 = none
+    int sky_directions = 128;     // visibility directions per receiver point for the sky
+    int light_samples = 16;       // visibility samples per receiver point in penumbrae
+    bool radiosity = false;       // solve for B instead of E (for comparison, seed Table 1)
+};
+
+struct Scene {
+    // Material of every packed material id (input << 16 | local), via MaterialOf().
+    std::vector<std::vector<Material>> per_input;  // [input][local material]
+    std::vector<PolygonLight> lights;
+    Sky sky;
+    SolverSettings solver;
+    std::string description;      // where it came from, for logs and stats
+
+    const Material& MaterialOf(uint32_t packed) const {
+        return per_input[packed >> 16][packed & 0xFFFF];
+    }
+};
+
+// scene_file empty: OBJ/MTL materials plus the default rig (a sky and a key area light
+// placed from the bounding box). Throws Error(Input) naming the file and the field.
+Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file);
+
+// The default rig for a scene with this bounding box (exposed for tests and docs).
+void AddDefaultRig(Scene& scene, const Vec3d& bbox_min, const Vec3d& bbox_max);
+
+}  // namespace mebake::solve

@@ -1,0 +1,78 @@
+// The bake directory (scene.mebake/): what ingest writes and every later stage reads.
+//
+//   manifest.json        format version, inputs, settings, counts, chart table, state
+//   vertices.bin         spilled positions (Vec3f per input vertex, global order)
+//   colors.bin           spilled vertex colours (RGBA8, alpha 0 = none)
+//   faces.bin            spilled triangles (SpillFace)
+//   owners.bin           per vertex: which brick uses it (or shared)
+//   bricks/              per-brick face lists (deleted once the tiles are written)
+//   tiles/cNNNNNN.tile   one chart tile per chart (chunk_file "TILE")
+//   proxy.bin            the visibility mesh (chunk_file "PRXY")
+//
+// The manifest is rewritten atomically (temp + fsync + rename) after each stage, so
+// it always describes files that are complete.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mebake::stream {
+
+constexpr int kManifestVersion = 1;
+
+struct InputRecord {
+    std::string path;         // as given ("-" for stdin)
+    uint64_t bytes = 0;       // bytes read
+    uint64_t vertices = 0, triangles = 0;
+    uint64_t first_vertex = 0, first_face = 0;
+    bool has_colors = false;
+    std::vector<std::string> materials;
+    std::vector<std::string> mtllibs;
+};
+
+struct ChartRecord {
+    uint32_t brick = 0;
+    uint32_t triangles = 0, vertices = 0;
+    uint32_t resolution = 0;        // texels per side of the chart's square
+    double scale = 0;               // 3D length of the unit square's side
+    double area = 0;                // real (3D) surface area
+    double area_distortion = 0;     // area-weighted mean |J/J_mean - 1|
+    double virtual_fraction = 0;    // part of the unit square not covered by the chart
+    Vec3f bbox_min{}, bbox_max{};
+};
+
+struct Manifest {
+    int version = kManifestVersion;
+    std::string state;              // "spilled", "binned", "ingested"
+    std::vector<InputRecord> inputs;
+    // Settings that determine the tiles' bytes.
+    double texel_size = 0;
+    uint64_t brick_faces = 0;
+    double max_distortion = 0;
+    uint64_t memory_budget = 0;
+    // Counts.
+    uint64_t vertex_count = 0, face_count = 0;
+    Vec3d bbox_min{}, bbox_max{};
+    double surface_area = 0;
+    uint32_t brick_count = 0;
+    std::vector<ChartRecord> charts;
+    uint64_t proxy_triangles = 0;
+    double proxy_deviation = 0;     // max distance of the proxy from the input surface
+    // Timings of the passes, seconds.
+    std::vector<std::pair<std::string, double>> timings;
+};
+
+std::string ManifestPath(const std::string& dir);
+std::string TilePath(const std::string& dir, uint32_t chart);
+std::string ProxyPath(const std::string& dir);
+
+// Atomic write. Throws Error(Io).
+void WriteManifest(const std::string& dir, const Manifest& m);
+// Throws Error(Io) if missing, Error(Corrupt) naming the file if malformed.
+Manifest ReadManifest(const std::string& dir);
+bool IsBakeDirectory(const std::string& path);
+
+}  // namespace mebake::stream

@@ -1,0 +1,225 @@
+#include "stream/bricks.h"
+
+#include <fcntl.h>
+#include <lz4.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "core/check.h"
+#include "core/checksum.h"
+#include "core/error.h"
+#include "core/paged_file.h"
+
+namespace mebake::stream {
+
+namespace {
+
+constexpr int kLevel = 7;                       // 128^3 cells
+constexpr uint32_t kCells = 1u << (3 * kLevel);  // 2M cells: 8 MB of counts
+constexpr size_t kFlushBytes = size_t(256) << 10;
+
+uint32_t Spread3(uint32_t x) {  // 7 bits -> every third bit
+    uint32_t r = 0;
+    for (int i = 0; i < kLevel; ++i) r |= ((x >> i) & 1u) << (3 * i);
+    return r;
+}
+
+struct CellMapper {
+    Vec3d lo, scale;
+    CellMapper(const Vec3d& bmin, const Vec3d& bmax) : lo(bmin) {
+        Vec3d ext = bmax - bmin;
+        double e = std::max({ext.x, ext.y, ext.z, 1e-30});
+        // A cube around the box keeps cells cubic (compact bricks for flat scenes).
+        scale = Vec3d(1, 1, 1) * (double(1 << kLevel) / (e * (1 + 1e-9)));
+    }
+    uint32_t Cell(const Vec3d& p) const {
+        auto q = [&](double v, double l, double s) {
+            return uint32_t(std::clamp((v - l) * s, 0.0, double((1 << kLevel) - 1)));
+        };
+        return Spread3(q(p.x, lo.x, scale.x)) | Spread3(q(p.y, lo.y, scale.y)) << 1 |
+               Spread3(q(p.z, lo.z, scale.z)) << 2;
+    }
+};
+
+// Appends LZ4 blocks to a brick file: [u32 raw bytes][u32 stored bytes][u32 crc][data].
+class BrickFile {
+public:
+    explicit BrickFile(std::string path) : path_(std::move(path)) {}
+    ~BrickFile() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    void Add(const BrickFace& f) {
+        buffer_.push_back(f);
+        if (buffer_.size() * sizeof(BrickFace) >= kFlushBytes) Flush();
+    }
+    void Flush() {
+        if (buffer_.empty()) return;
+        if (fd_ < 0) {
+            fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+            if (fd_ < 0) IoError({path_}, "cannot create: {}", ErrnoString(errno));
+        }
+        int raw = int(buffer_.size() * sizeof(BrickFace));
+        std::vector<char> out(12 + size_t(LZ4_compressBound(raw)));
+        int n = LZ4_compress_default(reinterpret_cast<const char*>(buffer_.data()), out.data() + 12,
+                                     raw, int(out.size() - 12));
+        CHECK_GT(n, 0);
+        uint32_t head[3] = {uint32_t(raw), uint32_t(n), Crc32(out.data() + 12, size_t(n))};
+        std::memcpy(out.data(), head, 12);
+        size_t total = 12 + size_t(n), done = 0;
+        while (done < total) {
+            ssize_t w = ::write(fd_, out.data() + done, total - done);
+            if (w < 0 && errno == EINTR) continue;
+            if (w < 0) IoError({path_}, "write failed: {}", ErrnoString(errno));
+            done += size_t(w);
+        }
+        buffer_.clear();
+    }
+    void Close() {
+        Flush();
+        if (fd_ >= 0 && ::close(fd_) != 0) IoError({path_}, "close failed: {}", ErrnoString(errno));
+        fd_ = -1;
+    }
+
+private:
+    std::string path_;
+    int fd_ = -1;
+    std::vector<BrickFace> buffer_;
+};
+
+}  // namespace
+
+std::string BrickPath(const std::string& dir, uint32_t brick) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "/bricks/b%05u.faces", brick);
+    return dir + name;
+}
+
+std::string OwnersPath(const std::string& dir) { return dir + "/owners.bin"; }
+
+BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOptions& opt) {
+    BrickPlan plan;
+    std::filesystem::create_directories(dir + "/bricks");
+    const size_t cache = std::max<size_t>(opt.cache_bytes / 4, size_t(1) << 20);
+    DiskArray<Vec3f> vertices(Spill::VerticesPath(dir), false, cache);
+    DiskArray<SpillFace> faces(Spill::FacesPath(dir), false, cache);
+    CHECK_EQ(vertices.size(), spill.vertex_count);
+    CHECK_EQ(faces.size(), spill.face_count);
+    CellMapper mapper(spill.bbox_min, spill.bbox_max);
+
+    // 1. Cell of every face (kept on disk) and the count per cell.
+    std::vector<uint32_t> count(kCells, 0);
+    DiskArray<uint32_t> cells(dir + "/cells.bin", true, cache);
+    for (uint64_t f = 0; f < spill.face_count; ++f) {
+        SpillFace sf = faces.Get(f);
+        Vec3d p[3];
+        for (int c = 0; c < 3; ++c) p[c] = Vec3d(vertices.Get(sf.v[c]));
+        uint32_t cell = mapper.Cell((p[0] + p[1] + p[2]) * (1.0 / 3));
+        cells.Push(cell);
+        ++count[cell];
+        plan.surface_area += 0.5 * Length(Cross(p[1] - p[0], p[2] - p[0]));
+    }
+    cells.Flush();
+
+    // 2. Bricks: leaves of the octree with <= max_faces faces, in Morton order, then
+    // consecutive leaves merged while they fit.
+    std::vector<uint64_t> prefix(size_t(kCells) + 1, 0);
+    for (uint32_t c = 0; c < kCells; ++c) prefix[c + 1] = prefix[c] + count[c];
+    std::vector<std::pair<uint32_t, uint32_t>> leaves;  // [first, end) cell ranges
+    auto recurse = [&](auto&& self, uint32_t first, uint32_t size) -> void {
+        uint64_t n = prefix[first + size] - prefix[first];
+        if (n == 0) return;
+        if (n <= opt.max_faces || size == 1) {
+            leaves.emplace_back(first, first + size);
+            return;
+        }
+        for (uint32_t k = 0; k < 8; ++k) self(self, first + k * (size / 8), size / 8);
+    };
+    recurse(recurse, 0, kCells);
+    std::vector<uint32_t> brick_of_cell(kCells, 0);
+    for (auto [first, end] : leaves) {
+        uint64_t n = prefix[end] - prefix[first];
+        if (plan.bricks.empty() || plan.bricks.back().face_count + n > opt.max_faces)
+            plan.bricks.push_back(BrickInfo{0, first, end});
+        BrickInfo& b = plan.bricks.back();
+        b.face_count += n;
+        b.end_cell = end;
+        for (uint32_t c = first; c < end; ++c) brick_of_cell[c] = uint32_t(plan.bricks.size() - 1);
+    }
+    std::vector<uint32_t>().swap(count);
+    std::vector<uint64_t>().swap(prefix);
+
+    // 3. Distribution, and which brick(s) use each vertex.
+    {
+        DiskArray<uint32_t> owners(OwnersPath(dir), true, cache);
+        const uint32_t none = kOwnerNone;
+        for (uint64_t v = 0; v < spill.vertex_count; ++v) owners.Push(none);
+        std::vector<BrickFile> files;
+        files.reserve(plan.bricks.size());
+        for (uint32_t b = 0; b < plan.bricks.size(); ++b) files.emplace_back(BrickPath(dir, b));
+        for (auto& b : plan.bricks) b.face_count = 0;
+        for (uint64_t f = 0; f < spill.face_count; ++f) {
+            SpillFace sf = faces.Get(f);
+            uint32_t brick = brick_of_cell[cells.Get(f)];
+            files[brick].Add(BrickFace{{sf.v[0], sf.v[1], sf.v[2]}, f, sf.material, 0});
+            ++plan.bricks[brick].face_count;
+            for (int c = 0; c < 3; ++c) {
+                uint32_t o = owners.Get(sf.v[c]);
+                if (o == kOwnerNone) owners.Set(sf.v[c], brick);
+                else if (o != brick && o != kOwnerShared) owners.Set(sf.v[c], kOwnerShared);
+            }
+        }
+        for (auto& file : files) file.Close();
+        owners.Flush();
+    }
+    std::filesystem::remove(dir + "/cells.bin");
+    return plan;
+}
+
+std::vector<BrickFace> ReadBrick(const std::string& dir, uint32_t brick) {
+    std::string path = BrickPath(dir, brick);
+    std::vector<BrickFace> out;
+    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) return out;  // a brick whose faces were all elsewhere
+        IoError({path}, "cannot open: {}", ErrnoString(errno));
+    }
+    std::vector<char> block;
+    uint64_t offset = 0;
+    for (;;) {
+        uint32_t head[3];
+        ssize_t n = ::pread(fd, head, 12, off_t(offset));
+        if (n == 0) break;
+        if (n != 12) {
+            ::close(fd);
+            CorruptError({path, offset}, "truncated block header");
+        }
+        if (head[0] % sizeof(BrickFace) != 0 || head[0] > (64u << 20) || head[1] > (64u << 20)) {
+            ::close(fd);
+            CorruptError({path, offset}, "bad block sizes");
+        }
+        block.resize(head[1]);
+        if (::pread(fd, block.data(), head[1], off_t(offset + 12)) != ssize_t(head[1]) ||
+            Crc32(block.data(), head[1]) != head[2]) {
+            ::close(fd);
+            CorruptError({path, offset}, "block checksum mismatch");
+        }
+        size_t at = out.size();
+        out.resize(at + head[0] / sizeof(BrickFace));
+        int got = LZ4_decompress_safe(block.data(), reinterpret_cast<char*>(out.data() + at),
+                                      int(head[1]), int(head[0]));
+        if (got != int(head[0])) {
+            ::close(fd);
+            CorruptError({path, offset}, "block does not decompress");
+        }
+        offset += 12 + head[1];
+    }
+    ::close(fd);
+    return out;
+}
+
+}  // namespace mebake::stream
