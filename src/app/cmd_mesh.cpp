@@ -101,6 +101,8 @@ void PrintStats(const io::MeshStats& s) {
 }  // namespace
 
 int RunInfo(const InfoOptions& opt) {
+    if (opt.input != "-" && std::filesystem::is_directory(opt.input))
+        return RunBakeInfo(opt.input, opt.json);
     auto in = io::InputStream::Open(opt.input);
     io::MeshFormat format = io::DetectFormat(*in, opt.input, opt.format);
     io::MeshStatsSink sink;

@@ -28,4 +28,34 @@ struct ConvertOptions {
 };
 int RunConvert(const ConvertOptions& opt);
 
+struct IngestCommand {
+    std::vector<std::string> inputs;
+    std::optional<io::MeshFormat> format;
+    std::string output;
+    std::string memory = "1G";
+    int threads = 0;
+    double texel_size = 0;
+    uint32_t lightmap_resolution = 2048;
+    double max_distortion = 0.05;
+    bool force = false;
+};
+int RunIngest(const IngestCommand& opt);
+
+struct SolveCommand {
+    std::string dir;
+    std::string scene_file;
+    int order = -1;
+    double tolerance = -1;
+    int max_bounces = -1;
+    double time_limit = 0;
+    int threads = 0;
+    std::string memory = "1G";
+    std::string unknown = "irradiance";
+    std::string stats_file;
+};
+int RunSolve(const SolveCommand& opt);
+
+// `mebake info <bake directory>`.
+int RunBakeInfo(const std::string& dir, bool json);
+
 }  // namespace mebake::app

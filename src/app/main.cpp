@@ -78,6 +78,46 @@ int main(int argc, char** argv) {
     conv_cmd->add_flag("--float-colors", conv.float_colors, "Write PLY colours as float, not uchar");
     conv_cmd->add_flag("-f,--force", conv.force, "Overwrite an existing output file");
 
+    // ingest
+    mebake::app::IngestCommand ing;
+    std::string ing_format;
+    auto* ing_cmd = app.add_subcommand(
+        "ingest", "Stream meshes into a bake directory of chart tiles (memory bounded by --memory).");
+    ing_cmd->add_option("inputs", ing.inputs, "Mesh files, or '-' for stdin; several make one scene")
+        ->required();
+    ing_cmd->add_option("-o,--output", ing.output, "Bake directory to write (e.g. scene.mebake)")
+        ->required();
+    ing_cmd->add_option("--format", ing_format, "Format of stdin")->check(kFormatName);
+    ing_cmd->add_option("--memory", ing.memory, "Memory budget (e.g. 512M, 2G)", true);
+    ing_cmd->add_option("--threads", ing.threads, "Worker threads (0: all cores)", true);
+    auto* texel = ing_cmd->add_option("--texel-size", ing.texel_size,
+                                      "Light-map texel size in scene units (default: from --lightmap-resolution)");
+    ing_cmd->add_option("--lightmap-resolution", ing.lightmap_resolution,
+                        "Atlas side the default texel size aims at", true)
+        ->excludes(texel);
+    ing_cmd->add_option("--max-distortion", ing.max_distortion,
+                        "Jacobian (area) deviation above which a chart is split", true)
+        ->check(CLI::Range(0.001, 1.0));
+    ing_cmd->add_flag("-f,--force", ing.force, "Replace an existing bake directory");
+
+    // solve
+    mebake::app::SolveCommand sol;
+    auto* sol_cmd = app.add_subcommand(
+        "solve", "Compute global illumination on an ingested bake directory (Master-Element\n"
+                 "vector irradiance, Southwell shooting, adaptive wavelets).");
+    sol_cmd->add_option("dir", sol.dir, "Bake directory made by `mebake ingest`")->required();
+    sol_cmd->add_option("--scene", sol.scene_file, "Scene file (JSON): materials, lights, sky, settings");
+    sol_cmd->add_option("--order", sol.order, "Wavelet order: 0 constant ... 3 cubic (default 2)")
+        ->check(CLI::Range(0, 3));
+    sol_cmd->add_option("--tolerance", sol.tolerance, "Relative error that triggers subdivision (default 0.02)");
+    sol_cmd->add_option("--max-bounces", sol.max_bounces, "Shooting batches after the direct pass (default 16)");
+    sol_cmd->add_option("--time-limit", sol.time_limit, "Stop shooting after this many seconds");
+    sol_cmd->add_option("--threads", sol.threads, "Worker threads (0: all cores)", true);
+    sol_cmd->add_option("--memory", sol.memory, "Memory budget (e.g. 512M, 2G)", true);
+    sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity", true)
+        ->check(CLI::IsMember({"irradiance", "radiosity"}));
+    sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -91,6 +131,11 @@ int main(int argc, char** argv) {
             info.format = ToFormat(info_format);
             return mebake::app::RunInfo(info);
         }
+        if (*ing_cmd) {
+            ing.format = ToFormat(ing_format);
+            return mebake::app::RunIngest(ing);
+        }
+        if (*sol_cmd) return mebake::app::RunSolve(sol);
         if (*conv_cmd) {
             conv.in_format = ToFormat(conv_in_format);
             conv.out_format = ToFormat(conv_out_format);

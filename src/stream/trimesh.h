@@ -16,7 +16,8 @@ constexpr uint64_t kNoId = ~uint64_t(0);
 
 struct TriMesh {
     std::vector<Vec3f> position;                  // per vertex
-    std::vector<Vec3f> albedo;                    // per vertex, linear RGB; empty = none
+    std::vector<Vec3f> albedo;                    // per vertex colour as read (sRGB-encoded,
+                                                  // [0,1]); (-1,-1,-1) = none; empty = none
     std::vector<uint64_t> vertex_id;              // per vertex: global input vertex index
     std::vector<std::array<uint32_t, 3>> triangles;
     std::vector<uint64_t> face_id;                // per triangle: global input triangle

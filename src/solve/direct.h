@@ -1,0 +1,54 @@
+// Direct light at receiver points: polygonal area lights by Lambert's closed form
+// with visibility classified per point (lit, umbra or penumbra, in the spirit of seed
+// 002's extremal-boundary pass: a few rays decide, many rays only in penumbra), and the
+// sky by stratified cosine-weighted directions (the bent normal times the unoccluded
+// fraction, in effect).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "core/vec.h"
+#include "solve/scene.h"
+
+namespace mebake::solve {
+
+class VisibilityScene;
+
+struct ReceiverPoint {
+    Vec3f position;   // where the field is evaluated
+    Vec3f normal;     // receiver normal there (only its upper hemisphere contributes)
+    Vec3f vis_point;  // where visibility is evaluated (nearest real point)
+};
+
+class DirectLight {
+public:
+    DirectLight(const Scene& scene, const VisibilityScene& vis, float ray_offset, float scene_size);
+
+    // E (3 colours x 3 components, out[3*c + k]) at each point.
+    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out) const;
+    bool empty() const { return lights_.empty() && sky_.type == Sky::Type::None; }
+    // Power leaving the emitters (W), for the stopping rule and energy checks.
+    double EmittedPower() const;
+
+private:
+    struct Light {
+        std::vector<Vec3d> vertices;
+        Vec3d radiance;
+        bool two_sided;
+        Vec3d normal;
+        double area;
+        std::vector<Vec3f> classify;  // few sample points: corners pulled in, centre
+        std::vector<Vec3f> samples;   // stratified sample points for penumbrae
+    };
+    const VisibilityScene& vis_;
+    std::vector<Light> lights_;
+    Sky sky_;
+    std::vector<Vec3f> sky_dirs_;  // cosine-weighted stratified directions about +z
+    float offset_, far_;
+};
+
+// Clips a polygon to the half-space (y - x).n >= 0 (Sutherland-Hodgman).
+std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, const Vec3d& n);
+
+}  // namespace mebake::solve

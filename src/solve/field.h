@@ -1,0 +1,81 @@
+// The lighting on one chart: an adaptive quadtree over the chart's unit square whose
+// nodes hold polynomial coefficients (basis.h) for `blocks` scalar functions — 9 for
+// vector irradiance (3 colours x 3 components), 3 for radiosity.
+//
+// Per node there are three coefficient sets:
+//   value    gathered lighting; after Push() the leaves hold the complete solution and
+//            interior nodes their L2 projection (Pull), which coarse emitters read;
+//   unshot   the part of `value` not yet shot to other surfaces (Southwell residual);
+//   pending  lighting gathered at this node during a batch, not yet pushed to leaves.
+// Storage is pooled in flat arrays indexed by node, so memory follows the node count.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "solve/basis.h"
+
+namespace mebake::solve {
+
+struct QuadNode {
+    int32_t first_child = -1;  // four consecutive nodes in basis.h quadrant order
+    uint8_t level = 0;
+    uint32_t i = 0, j = 0;     // covers [i, i+1] x [j, j+1] / 2^level of the chart square
+
+    bool leaf() const { return first_child < 0; }
+    double size() const { return 1.0 / double(1u << level); }
+    // Chart coordinates of node-local (s, t).
+    double U(double s) const { return (i + s) * size(); }
+    double V(double t) const { return (j + t) * size(); }
+};
+
+class ChartField {
+public:
+    ChartField() = default;
+    ChartField(int order, int blocks);
+
+    int order() const { return order_; }
+    int blocks() const { return blocks_; }
+    int stride() const { return stride_; }  // floats per node per set
+    size_t node_count() const { return nodes_.size(); }
+    const QuadNode& node(size_t n) const { return nodes_[n]; }
+
+    float* value(size_t n) { return &value_[n * size_t(stride_)]; }
+    float* unshot(size_t n) { return &unshot_[n * size_t(stride_)]; }
+    float* pending(size_t n) { return &pending_[n * size_t(stride_)]; }
+    const float* value(size_t n) const { return &value_[n * size_t(stride_)]; }
+    const float* unshot(size_t n) const { return &unshot_[n * size_t(stride_)]; }
+
+    // Makes four children of a leaf; their value and unshot are the parent's restricted
+    // (Push), pending zero. Returns the first child's index.
+    int32_t Subdivide(size_t n);
+
+    // The leaf containing chart point (u, v) and the point's node-local coordinates.
+    size_t LeafAt(double u, double v, double* s, double* t) const;
+    // Evaluates value / unshot at (u, v) into out[blocks].
+    void EvalValue(double u, double v, float* out) const;
+    void EvalUnshot(double u, double v, float* out) const;
+
+    // Pushes every pending set down to the leaves, adding it to their value and unshot,
+    // then clears pending and recomputes interior nodes by Pull().
+    void PushPending();
+    // Interior value and unshot = projection of their children (bottom-up).
+    void Pull();
+    void ClearUnshot();
+
+    // Serialization support (checkpoints, solution files).
+    const std::vector<QuadNode>& nodes() const { return nodes_; }
+    const std::vector<float>& values() const { return value_; }
+    const std::vector<float>& unshots() const { return unshot_; }
+    void Assign(std::vector<QuadNode> nodes, std::vector<float> value, std::vector<float> unshot);
+    size_t MemoryBytes() const;
+
+private:
+    void PushDown(size_t n, const float* add);  // adds `add` (node n's basis) to n's subtree leaves
+
+    int order_ = 0, blocks_ = 0, stride_ = 0;
+    std::vector<QuadNode> nodes_;
+    std::vector<float> value_, unshot_, pending_;
+};
+
+}  // namespace mebake::solve

@@ -1,0 +1,35 @@
+// Shadow segments gathered in batches, so visibility goes to Embree many rays at a time.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.h"
+#include "solve/visibility.h"
+
+namespace mebake::solve {
+
+struct SegmentBatch {
+    std::vector<Segment> segments;
+    std::vector<uint8_t> occluded;
+
+    size_t size() const { return segments.size(); }
+    void Clear() {
+        segments.clear();
+        occluded.clear();
+    }
+    // The segment o + t d, t in (0, tfar).
+    void Add(const Vec3f& o, const Vec3f& d, float tfar) {
+        segments.push_back(Segment{o.x, o.y, o.z, 0.f, d.x, d.y, d.z, tfar});
+    }
+    // Segment from a to b, shortened slightly at the far end so b's own surface does
+    // not count as a blocker.
+    void AddSegment(const Vec3f& a, const Vec3f& b) { Add(a, b - a, 0.999f); }
+    // Fills `occluded` for every segment.
+    void Trace(const VisibilityScene& vis);
+};
+
+// Segments traced so far by this process (all threads), for statistics.
+uint64_t TotalRays();
+
+}  // namespace mebake::solve

@@ -1,0 +1,468 @@
+#include "solve/solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+#include "core/check.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "solve/direct.h"
+#include "solve/polygon_light.h"
+#include "solve/rays.h"
+#include "solve/visibility.h"
+
+namespace mebake::solve {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
+
+// sRGB-encoded vertex colour -> linear reflectance.
+float SrgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+}  // namespace
+
+struct Solver::Emitter {
+    struct Texel {
+        Vec3f pos, nrm, vis;
+        float area = 0;
+        Vec3f db;  // unshot radiosity
+    };
+    uint32_t chart = 0;
+    std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
+    Vec3f center;
+    float radius = 0;
+    double scale = 1;
+};
+
+Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const VisibilityScene& vis,
+               SolveOptions opt)
+    : scene_(scene), charts_(charts), vis_(vis), opt_(std::move(opt)) {
+    const int blocks = opt_.settings.radiosity ? 3 : 9;
+    fields_.reserve(charts_.size());
+    for (size_t c = 0; c < charts_.size(); ++c) fields_.emplace_back(opt_.settings.order, blocks);
+    emissive_.assign(charts_.size(), 0);
+    if (opt_.shoot_emission) {
+        for (size_t c = 0; c < charts_.size(); ++c) {
+            const auto& finest = charts_[c].geometry.levels.back();
+            for (const auto& t : finest)
+                if (t.area > 0 && scene_.MaterialOf(t.material).emissive()) {
+                    emissive_[c] = 1;
+                    break;
+                }
+        }
+    }
+}
+
+Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {
+    const Material& m = scene_.MaterialOf(material);
+    Vec3f a = m.albedo;
+    if (m.use_vertex_colors && color.x >= 0) {
+        for (int c = 0; c < 3; ++c)
+            a[c] = std::min(0.99f, SrgbToLinear(color[c]) * m.color_factor);
+    }
+    return a;
+}
+
+Vec3f Solver::Radiosity(uint32_t chart, double u, double v, const Vec3f& normal,
+                        const Vec3f& albedo, const Vec3f& emission) const {
+    float val[9];
+    fields_[chart].EvalValue(u, v, val);
+    Vec3f b = emission;
+    for (int c = 0; c < 3; ++c) {
+        if (opt_.settings.radiosity) {
+            b[c] += std::max(0.f, val[c]);
+        } else {
+            float irr = normal.x * val[3 * c] + normal.y * val[3 * c + 1] + normal.z * val[3 * c + 2];
+            b[c] += albedo[c] * std::max(0.f, irr);
+        }
+    }
+    return b;
+}
+
+void Solver::RefineDirect(uint32_t chart) {
+    const SolveChart& sc = charts_[chart];
+    ChartField& field = fields_[chart];
+    const int order = field.order(), blocks = field.blocks();
+    const int ng = order + 1, gc = order + 2;
+    const int finest = sc.geometry.finest_level();
+    DirectLight direct(scene_, vis_, opt_.ray_offset, opt_.scene_size);
+    const bool radiosity = opt_.settings.radiosity;
+
+    std::vector<ReceiverPoint> pts;
+    std::vector<Vec3f> albedo;
+    std::vector<float> e9, vals, coeffs(size_t(field.stride()));
+    // Field values at points: E (9 blocks) or B = rho (n.E)+ (3 blocks).
+    auto evaluate = [&](const QuadNode& node, int grid, bool gauss) {
+        pts.clear();
+        albedo.clear();
+        const int gl = std::min(finest, int(node.level) + 2);
+        for (int c = 0; c < grid; ++c) {
+            for (int a = 0; a < grid; ++a) {
+                double s, t, w;
+                if (gauss) {
+                    GaussPoint2D(grid, a + grid * c, &s, &t, &w);
+                } else {
+                    s = ControlPoint(grid, a);
+                    t = ControlPoint(grid, c);
+                }
+                auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
+                pts.push_back({smp.position, smp.normal, smp.vis_point});
+                albedo.push_back(Albedo(smp.material, smp.color));
+            }
+        }
+        e9.assign(pts.size() * 9, 0.f);
+        if (!direct.empty()) direct.Evaluate(pts, e9);
+        vals.assign(pts.size() * size_t(blocks), 0.f);
+        for (size_t p = 0; p < pts.size(); ++p) {
+            if (!radiosity) {
+                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
+                continue;
+            }
+            for (int c = 0; c < 3; ++c) {
+                const float* e = &e9[p * 9 + size_t(3 * c)];
+                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
+                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
+            }
+        }
+    };
+    auto max_abs = [](const std::vector<float>& v) {
+        float m = 0;
+        for (float x : v) m = std::max(m, std::abs(x));
+        return m;
+    };
+
+    // Depth-first refinement; an explicit stack keeps the node order deterministic.
+    std::vector<size_t> stack = {0};
+    while (!stack.empty()) {
+        size_t n = stack.back();
+        stack.pop_back();
+        QuadNode node = field.node(n);
+        if (int(node.level) < std::min(opt_.min_level, finest)) {
+            int32_t first = field.Subdivide(n);
+            for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
+            continue;
+        }
+        evaluate(node, ng, true);
+        float scale = max_abs(vals);
+        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+        if (int(node.level) < finest) {
+            evaluate(node, gc, false);
+            scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
+            float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
+            if (err > float(opt_.settings.tolerance) * scale) {
+                int32_t first = field.Subdivide(n);
+                for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
+                continue;
+            }
+        }
+        std::copy(coeffs.begin(), coeffs.end(), field.value(n));
+        std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
+    }
+    field.Pull();
+}
+
+void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
+    const SolveChart& sc = charts_[chart];
+    const ChartField& field = fields_[chart];
+    const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
+    e->chart = chart;
+    e->scale = sc.scale;
+    e->levels.assign(size_t(top) + 1, {});
+    const uint32_t n = 1u << top;
+    auto& lv = e->levels[size_t(top)];
+    lv.resize(size_t(n) * n);
+    float val[9];
+    for (uint32_t j = 0; j < n; ++j) {
+        for (uint32_t i = 0; i < n; ++i) {
+            const auto& g = sc.geometry.At(top, i, j);
+            Emitter::Texel& t = lv[size_t(j) * n + i];
+            t.pos = g.position;
+            t.nrm = g.normal;
+            t.vis = g.vis_point;
+            t.area = g.area;
+            if (g.area <= 0) continue;
+            double u = (i + 0.5) / n, v = (j + 0.5) / n;
+            field.EvalUnshot(u, v, val);
+            const Material& m = scene_.MaterialOf(g.material);
+            Vec3f rho = Albedo(g.material, g.color);
+            for (int c = 0; c < 3; ++c) {
+                float b;
+                if (opt_.settings.radiosity) {
+                    b = std::max(0.f, val[c]);
+                } else {
+                    float irr = g.normal.x * val[3 * c] + g.normal.y * val[3 * c + 1] +
+                                g.normal.z * val[3 * c + 2];
+                    b = rho[c] * std::max(0.f, irr);
+                }
+                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+                if (first_shot && emissive_[chart]) b += float(std::numbers::pi) * m.emission[c];
+                t.db[c] = b;
+            }
+        }
+    }
+    // Coarser samples: area-weighted means.
+    for (int l = top - 1; l >= 0; --l) {
+        const auto& fine = e->levels[size_t(l) + 1];
+        auto& coarse = e->levels[size_t(l)];
+        const uint32_t m = 1u << l, fm = m * 2;
+        coarse.resize(size_t(m) * m);
+        for (uint32_t j = 0; j < m; ++j) {
+            for (uint32_t i = 0; i < m; ++i) {
+                Emitter::Texel& t = coarse[size_t(j) * m + i];
+                const auto& g = sc.geometry.At(l, i, j);
+                t.pos = g.position;
+                t.vis = g.vis_point;
+                Vec3f nrm{}, db{};
+                float area = 0;
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    area += k.area;
+                    nrm += k.nrm * k.area;
+                    db += k.db * k.area;
+                }
+                t.area = area;
+                t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
+                t.db = area > 0 ? db / area : Vec3f{};
+            }
+        }
+    }
+    const auto& root = sc.geometry.At(0, 0, 0);
+    e->center = root.position;
+    e->radius = root.radius;
+}
+
+double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
+    Emitter e;
+    BuildEmitter(chart, first_shot, &e);
+    double p = 0;
+    for (const auto& t : e.levels.back()) p += double(Luminance(t.db)) * t.area;
+    return p;
+}
+
+void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
+    const SolveChart& sc = charts_[receiver];
+    ChartField& field = fields_[receiver];
+    const int order = field.order(), blocks = field.blocks(), ng = order + 1;
+    const int finest = sc.geometry.finest_level();
+    const bool radiosity = opt_.settings.radiosity;
+    const float eps = opt_.ray_offset;
+
+    struct Pair {
+        uint32_t point, texel;
+        Vec3f contribution_dir;  // E contribution per unit radiosity (w * d)
+    };
+    std::vector<ReceiverPoint> pts;
+    std::vector<Vec3f> albedo;
+    std::vector<Pair> pairs;
+    std::vector<float> e9, vals, coeffs(size_t(field.stride()));
+    SegmentBatch batch;
+
+    for (const Emitter& em : emitters) {
+        const int top = int(em.levels.size()) - 1;
+        std::vector<size_t> stack = {0};
+        while (!stack.empty()) {
+            const size_t n = stack.back();
+            stack.pop_back();
+            const QuadNode node = field.node(n);
+            // Node bounds from the geometry pyramid.
+            Vec3f center;
+            float radius;
+            if (int(node.level) <= finest) {
+                const auto& g = sc.geometry.At(node.level, node.i, node.j);
+                center = g.position;
+                radius = g.radius;
+            } else {
+                auto smp = stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)),
+                                                  float(node.V(0.5)));
+                center = smp.position;
+                radius = float(sc.scale * node.size() * 0.75);
+            }
+            const double dist = double(Length(center - em.center)) - radius - em.radius;
+            const double side = sc.scale * node.size();
+            if (!node.leaf() && (dist <= 0 || side / dist > opt_.receiver_tau)) {
+                for (int c = 3; c >= 0; --c) stack.push_back(size_t(node.first_child + c));
+                continue;
+            }
+            // Emitter level: sample size / distance below tau, capped.
+            int le = top;
+            if (dist > 0) {
+                le = int(std::ceil(std::log2(std::max(1.0, em.scale / (opt_.emitter_tau * dist)))));
+                le = std::clamp(le, std::min(1, top), top);
+            }
+            const auto& texels = em.levels[size_t(le)];
+            const double texel_side = em.scale / double(1u << le);
+
+            // Receiver points: the node's Gauss points.
+            pts.clear();
+            albedo.clear();
+            const int gl = std::min(finest, int(node.level) + 2);
+            for (int p = 0; p < ng * ng; ++p) {
+                double s, t, w;
+                GaussPoint2D(ng, p, &s, &t, &w);
+                auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
+                pts.push_back({smp.position, smp.normal, smp.vis_point});
+                albedo.push_back(Albedo(smp.material, smp.color));
+            }
+            // Candidate pairs and their shadow rays.
+            pairs.clear();
+            batch.Clear();
+            for (uint32_t p = 0; p < pts.size(); ++p) {
+                const ReceiverPoint& rp = pts[p];
+                const Vec3f org = rp.vis_point + rp.normal * eps;
+                for (uint32_t k = 0; k < texels.size(); ++k) {
+                    const auto& t = texels[k];
+                    if (t.area <= 0 || (t.db.x <= 0 && t.db.y <= 0 && t.db.z <= 0)) continue;
+                    const Vec3d d = Vec3d(t.pos) - Vec3d(rp.position);
+                    const double r2 = Dot(d, d);
+                    if (r2 < 1e-20) continue;
+                    if (Dot(d, Vec3d(rp.normal)) <= 0) continue;  // below the receiver's horizon
+                    const double ce = -Dot(d, Vec3d(t.nrm));
+                    if (ce <= 0) continue;                        // emitter faces away
+                    Vec3d contrib;
+                    if (r2 < 4 * texel_side * texel_side) {
+                        // Near field: the sample as a uniform square, in closed form.
+                        Vec3f tu, tv;
+                        const Vec3f nz = t.nrm;
+                        const Vec3f ref = std::abs(nz.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
+                        tu = Normalize(Cross(ref, nz));
+                        tv = Cross(nz, tu);
+                        const double h = 0.5 * std::sqrt(double(t.area));
+                        const Vec3d c(t.pos), a(tu), b(tv);
+                        const Vec3d quad[4] = {c - a * h - b * h, c + a * h - b * h,
+                                               c + a * h + b * h, c - a * h + b * h};
+                        auto clipped = ClipToHalfSpace(quad, Vec3d(rp.position), Vec3d(rp.normal));
+                        if (clipped.size() < 3) continue;
+                        contrib = VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
+                    } else {
+                        contrib = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
+                    }
+                    pairs.push_back({p, k, Vec3f(contrib)});
+                    batch.AddSegment(org, t.vis + t.nrm * eps);
+                }
+            }
+            batch.Trace(vis_);
+            // Accumulate unoccluded pairs in a fixed order.
+            e9.assign(pts.size() * 9, 0.f);
+            for (size_t q = 0; q < pairs.size(); ++q) {
+                if (batch.occluded[q]) continue;
+                const Pair& pr = pairs[q];
+                const auto& t = texels[pr.texel];
+                for (int c = 0; c < 3; ++c)
+                    for (int k = 0; k < 3; ++k)
+                        e9[pr.point * 9 + size_t(3 * c + k)] += t.db[c] * pr.contribution_dir[k];
+            }
+            vals.assign(pts.size() * size_t(blocks), 0.f);
+            for (size_t p = 0; p < pts.size(); ++p) {
+                if (!radiosity) {
+                    std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
+                    continue;
+                }
+                for (int c = 0; c < 3; ++c) {
+                    const float* e = &e9[p * 9 + size_t(3 * c)];
+                    float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
+                    vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
+                }
+            }
+            ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+            float* pend = field.pending(n);
+            for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        }
+    }
+    field.PushPending();
+}
+
+void Solver::Run(const Progress& progress) {
+    const auto t0 = Clock::now();
+    const uint32_t nc = uint32_t(charts_.size());
+    const uint64_t rays0 = TotalRays();
+
+    // Reference irradiance for the refinement floor: the brightest root-level estimate.
+    {
+        DirectLight direct(scene_, vis_, opt_.ray_offset, opt_.scene_size);
+        std::vector<ReceiverPoint> pts;
+        for (const auto& c : charts_) {
+            for (int k = 0; k < std::min(c.geometry.finest_level(), 2) + 1; ++k) {
+                for (const auto& g : c.geometry.levels[size_t(k)])
+                    if (g.area > 0) pts.push_back({g.position, g.normal, g.vis_point});
+            }
+        }
+        std::vector<float> e(pts.size() * 9, 0.f);
+        if (!direct.empty() && !pts.empty()) direct.Evaluate(pts, e);
+        double ref = 0;
+        for (size_t p = 0; p < pts.size(); ++p)
+            for (int c = 0; c < 3; ++c) {
+                const float* v = &e[p * 9 + size_t(3 * c)];
+                ref = std::max(ref, double(Length(Vec3f(v[0], v[1], v[2]))));
+            }
+        reference_ = ref;
+    }
+
+    ParallelFor(0, nc, [&](int64_t c) { RefineDirect(uint32_t(c)); });
+    stats_.seconds_direct = Since(t0);
+
+    // Southwell batches.
+    const auto t1 = Clock::now();
+    std::vector<double> power(nc);
+    bool first = true;
+    for (int batch = 0;; ++batch) {
+        ParallelFor(0, nc, [&](int64_t c) { power[size_t(c)] = UnshotPower(uint32_t(c), first); });
+        double total = 0, largest = 0;
+        for (double p : power) {
+            total += p;
+            largest = std::max(largest, p);
+        }
+        if (first) stats_.emitted_power = total;
+        stats_.unshot_power = total;
+        const double fraction = stats_.emitted_power > 0 ? total / stats_.emitted_power : 0;
+        if (progress) progress(batch, fraction, TotalRays() - rays0);
+        if (total <= 0 || fraction < opt_.settings.stop_fraction) {
+            stats_.stop_reason = "converged";
+            break;
+        }
+        if (batch >= opt_.settings.max_bounces) {
+            stats_.stop_reason = "bounce limit";
+            break;
+        }
+        if (opt_.settings.time_limit > 0 && Since(t0) > opt_.settings.time_limit) {
+            stats_.stop_reason = "time limit";
+            break;
+        }
+        // Shooters: power within batch_fraction of the largest, in chart order. The first
+        // batch shoots every chart, so emission (added only to first shots) goes out once.
+        std::vector<uint32_t> shooters;
+        for (uint32_t c = 0; c < nc; ++c)
+            if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
+                shooters.push_back(c);
+        std::vector<Emitter> emitters(shooters.size());
+        ParallelFor(0, int64_t(shooters.size()), [&](int64_t k) {
+            BuildEmitter(shooters[size_t(k)], first, &emitters[size_t(k)]);
+        });
+        for (uint32_t c : shooters) fields_[c].ClearUnshot();
+        ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
+        stats_.shots += shooters.size();
+        stats_.batches = batch + 1;
+        first = false;
+    }
+    stats_.seconds_indirect = Since(t1);
+    stats_.rays = TotalRays() - rays0;
+    for (const auto& f : fields_) {
+        for (const auto& n : f.nodes()) {
+            if (stats_.nodes_per_level.size() <= n.level) stats_.nodes_per_level.resize(n.level + 1u);
+            ++stats_.nodes_per_level[n.level];
+            stats_.leaves += n.leaf() ? 1 : 0;
+        }
+        stats_.field_bytes += f.MemoryBytes();
+    }
+}
+
+}  // namespace mebake::solve

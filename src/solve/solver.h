@@ -1,0 +1,100 @@
+// The Master-Element solver (seed 000 sections 2-4, DESIGN.md section 3).
+//
+//  1. Direct pass: per chart, an adaptive quadtree is refined from the root until the
+//     polynomial fitted at the Gauss points (collocation) matches the direct light at a
+//     grid of control points within the tolerance; depth is capped by the texel size.
+//  2. Southwell shooting in deterministic batches: the charts whose unshot power
+//     (integral of rho (n . dE)+ over their real part) is within a factor of the largest
+//     shoot together; every receiver chart gathers their unshot radiosity at the
+//     coarsest quadtree level that meets the size/distance bound (the suitable scale),
+//     from emitter samples at a level chosen the same way, with one visibility ray per
+//     point pair, then pushes the gathered coefficients to its leaves.
+//  3. Stops when the unshot power falls below a fraction of the first shot's power, or
+//     at the bounce or time limit.
+// Receivers are processed in parallel, each writing only its own field, in a fixed
+// order: the result is bit-identical for any thread count.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solve/field.h"
+#include "solve/scene.h"
+#include "stream/geometry_image.h"
+
+namespace mebake::solve {
+
+class VisibilityScene;
+
+struct SolveChart {
+    stream::GeometryImage geometry;
+    double scale = 1;  // 3D length of the unit square's side
+};
+
+struct SolveOptions {
+    SolverSettings settings;
+    float ray_offset = 1e-4f;       // absolute; callers add the proxy's deviation
+    float scene_size = 1;           // bounding-box diagonal
+    int min_level = 2;              // quadtrees start this deep
+    double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
+    double emitter_tau = 0.5;       // emitter sample size / distance
+    int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
+    double batch_fraction = 0.05;   // shoot charts with power >= this x the largest
+    bool shoot_emission = true;     // emissive materials shoot their emission in batch 0
+                                    // (false when they are handled as polygon lights)
+};
+
+struct SolveStats {
+    int batches = 0;
+    uint64_t shots = 0;             // chart shots
+    uint64_t rays = 0;
+    double seconds_direct = 0, seconds_indirect = 0;
+    double emitted_power = 0;       // first-shot power (direct light reflected + emission)
+    double unshot_power = 0;        // left when it stopped
+    std::vector<uint64_t> nodes_per_level;
+    uint64_t leaves = 0;
+    size_t field_bytes = 0;
+    std::string stop_reason;
+};
+
+class Solver {
+public:
+    Solver(const Scene& scene, const std::vector<SolveChart>& charts, const VisibilityScene& vis,
+           SolveOptions opt);
+
+    // Progress callback: (batch, unshot fraction, rays so far).
+    using Progress = std::function<void(int, double, uint64_t)>;
+    void Run(const Progress& progress = {});
+
+    const std::vector<ChartField>& fields() const { return fields_; }
+    std::vector<ChartField>& mutable_fields() { return fields_; }
+    const SolveStats& stats() const { return stats_; }
+    bool radiosity() const { return opt_.settings.radiosity; }
+
+    // Albedo (linear RGB) of a surface sample, from its material and vertex colour.
+    Vec3f Albedo(uint32_t material, const Vec3f& color) const;
+
+    // Radiosity B = Be + rho (n . E)+ at chart point (u, v) with the given normal.
+    Vec3f Radiosity(uint32_t chart, double u, double v, const Vec3f& normal, const Vec3f& albedo,
+                    const Vec3f& emission) const;
+
+private:
+    struct Emitter;
+    void RefineDirect(uint32_t chart);
+    void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
+    void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
+    double UnshotPower(uint32_t chart, bool first_shot) const;
+
+    const Scene& scene_;
+    const std::vector<SolveChart>& charts_;
+    const VisibilityScene& vis_;
+    SolveOptions opt_;
+    std::vector<ChartField> fields_;
+    std::vector<uint8_t> emissive_;  // chart has emissive texels (shot in the first batch)
+    SolveStats stats_;
+    double reference_ = 0;  // brightest direct irradiance: floor of the refinement scale
+};
+
+}  // namespace mebake::solve

@@ -1,0 +1,228 @@
+#include "stream/chart_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+
+#include "core/check.h"
+#include "core/error.h"
+#include "core/paged_file.h"
+#include "stream/bricks.h"
+#include "stream/chart_grid.h"
+#include "stream/parameterize.h"
+#include "stream/segment.h"
+#include "stream/spill.h"
+#include "stream/tile.h"
+
+namespace mebake::stream {
+
+namespace {
+
+// The brick's faces as a TriMesh with local indices (global ids ascending).
+TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
+                  std::vector<uint8_t>* on_cut) {
+    std::vector<BrickFace> faces = ReadBrick(dir, brick);
+    std::vector<uint64_t> ids;
+    ids.reserve(faces.size() * 3);
+    for (const auto& f : faces) ids.insert(ids.end(), f.v, f.v + 3);
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+
+    TriMesh m;
+    m.vertex_id = ids;
+    m.position.resize(ids.size());
+    on_cut->assign(ids.size(), 0);
+    DiskArray<Vec3f> positions(Spill::VerticesPath(dir), false, cache_bytes / 3);
+    DiskArray<SpillColor> colors(Spill::ColorsPath(dir), false, cache_bytes / 3);
+    DiskArray<uint32_t> owners(OwnersPath(dir), false, cache_bytes / 3);
+    bool any_color = false;
+    std::vector<SpillColor> col(ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) {
+        m.position[i] = positions.Get(ids[i]);
+        col[i] = colors.Get(ids[i]);
+        any_color |= col[i].a != 0;
+        (*on_cut)[i] = owners.Get(ids[i]) == kOwnerShared;
+    }
+    if (any_color) {
+        m.albedo.resize(ids.size());
+        for (size_t i = 0; i < ids.size(); ++i)
+            m.albedo[i] = col[i].a ? Vec3f(col[i].r / 255.f, col[i].g / 255.f, col[i].b / 255.f)
+                                   : Vec3f(-1, -1, -1);
+    }
+    m.triangles.reserve(faces.size());
+    for (const auto& f : faces) {
+        std::array<uint32_t, 3> t;
+        for (int c = 0; c < 3; ++c)
+            t[size_t(c)] = uint32_t(std::lower_bound(ids.begin(), ids.end(), f.v[c]) - ids.begin());
+        m.triangles.push_back(t);
+        m.face_id.push_back(f.face_id);
+        m.material.push_back(f.material);
+    }
+    return m;
+}
+
+uint32_t ResolutionFor(double scale, const ChartBuildOptions& opt) {
+    double want = scale / opt.texel_size;
+    uint32_t r = opt.min_resolution;
+    while (r < opt.max_resolution && double(r) < want) r *= 2;
+    return r;
+}
+
+// Samples the master element into the finest level of its geometry image.
+GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, const ChartGrid& grid,
+                             const std::vector<Vec3f>& normals, uint32_t res) {
+    GeometryImage img;
+    img.resolution = res;
+    int levels = 0;
+    while ((1u << levels) < res) ++levels;
+    img.levels.resize(size_t(levels) + 1);
+    auto& fine = img.levels.back();
+    fine.resize(size_t(res) * res);
+    const int k = 4;  // sub-samples per texel side, for coverage and area
+    const double texel_uv = 1.0 / res;
+    const double s2 = param.scale * param.scale;
+    for (uint32_t j = 0; j < res; ++j) {
+        for (uint32_t i = 0; i < res; ++i) {
+            GeometryTexel& t = fine[size_t(j) * res + i];
+            Vec2f centre(float((i + 0.5) * texel_uv), float((j + 0.5) * texel_uv));
+            SurfacePoint sp = Evaluate(grid, chart.position, normals, centre);
+            t.position = sp.position;
+            t.normal = sp.normal;
+            t.vis_point = sp.visible_position;
+            uint32_t tri = sp.triangle;
+            double area = 0;
+            int real = 0;
+            for (int b = 0; b < k; ++b) {
+                for (int a = 0; a < k; ++a) {
+                    Vec2f u(float((i + (a + 0.5) / k) * texel_uv), float((j + (b + 0.5) / k) * texel_uv));
+                    GridLocation loc = grid.Locate(u);
+                    if (!loc.real) continue;
+                    ++real;
+                    area += double(param.area_ratio[loc.triangle]) * s2 * texel_uv * texel_uv / (k * k);
+                }
+            }
+            t.area = float(area);
+            t.coverage = float(real) / float(k * k);
+            t.radius = float(0.75 * texel_uv * param.scale);
+            if (tri != kNoTriangle) {
+                t.material = chart.material[tri];
+                if (!chart.albedo.empty()) {
+                    GridLocation loc = grid.Locate(sp.real ? centre : grid.Locate(centre).nearest_uv);
+                    Vec3f c{};
+                    bool ok = true;
+                    for (int v = 0; v < 3; ++v) {
+                        const Vec3f& a = chart.albedo[chart.triangles[loc.triangle][size_t(v)]];
+                        ok &= a.x >= 0;
+                        c += a * loc.barycentric[size_t(v)];
+                    }
+                    t.color = ok ? c : Vec3f(-1, -1, -1);
+                } else {
+                    t.color = Vec3f(-1, -1, -1);
+                }
+            }
+        }
+    }
+    img.BuildPyramid();
+    return img;
+}
+
+}  // namespace
+
+BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt) {
+    BrickResult out;
+    std::vector<uint8_t> on_cut;
+    TriMesh mesh = LoadBrick(dir, brick, opt.cache_bytes, &on_cut);
+    if (mesh.triangles.empty()) return out;
+    out.repair = Repair(mesh, on_cut, RepairOptions{});
+    out.proxy_positions = mesh.position;
+    out.proxy_triangles.reserve(mesh.triangles.size() * 3);
+    for (const auto& t : mesh.triangles) out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
+
+    SegmentOptions sopt;
+    sopt.max_chart_triangles = opt.max_chart_triangles;
+    std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, nullptr);
+    uint32_t chart_count = 0;
+    for (uint32_t c : chart_of) chart_count = std::max(chart_count, c + 1);
+
+    // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
+    // in two and both halves go back to the front of the queue, so the order stays fixed.
+    std::deque<std::pair<TriMesh, int>> queue;
+    for (uint32_t c = 0; c < chart_count; ++c) queue.emplace_back(ExtractChart(mesh, chart_of, c), 0);
+    ParamOptions popt;
+    popt.max_jacobian_deviation = opt.max_distortion;
+    while (!queue.empty()) {
+        auto [chart, depth] = std::move(queue.front());
+        queue.pop_front();
+        if (chart.triangles.empty()) continue;
+        ChartParam param = ParameterizeChart(chart, popt);
+        const bool can_split = chart.triangles.size() > 1 && depth < 24;
+        if (param.status != ParamStatus::kOk && can_split &&
+            (param.status == ParamStatus::kDistorted || !HasUv(param.status) ||
+             param.status == ParamStatus::kFlipped)) {
+            std::vector<uint32_t> half = SplitChart(chart, 2);
+            uint32_t parts = 0;
+            for (uint32_t h : half) parts = std::max(parts, h + 1);
+            if (parts >= 2) {
+                ++out.splits;
+                for (uint32_t p = parts; p-- > 0;) queue.emplace_front(ExtractChart(chart, half, p), depth + 1);
+                continue;
+            }
+        }
+        if (!HasUv(param.status))
+            InputError({dir}, "brick {}: a chart of {} triangles cannot be parameterized ({}: {})",
+                       brick, chart.triangles.size(), ParamStatusName(param.status), param.message);
+
+        ChartTile tile;
+        tile.position = chart.position;
+        tile.normal = VertexNormals(chart.position, chart.triangles);
+        tile.uv = param.uv;
+        if (!chart.albedo.empty()) tile.color = chart.albedo;
+        tile.vertex_id = chart.vertex_id;
+        tile.triangles = chart.triangles;
+        tile.face_id = chart.face_id;
+        tile.material = chart.material;
+        int grid_res = DefaultGridResolution(chart.triangles.size());
+        tile.grid = BuildChartGrid(tile.uv, tile.triangles, grid_res);
+        const uint32_t res = ResolutionFor(param.scale, opt);
+        tile.geometry = SampleGeometry(chart, param, tile.grid, tile.normal, res);
+
+        ChartMeta& m = tile.meta;
+        m.brick = brick;
+        m.vertex_count = uint32_t(chart.position.size());
+        m.triangle_count = uint32_t(chart.triangles.size());
+        m.resolution = res;
+        m.grid_resolution = uint32_t(grid_res);
+        m.scale = param.scale;
+        m.area = param.metrics.area_3d;
+        m.jacobian_deviation = param.metrics.jacobian_deviation_mean;
+        m.jacobian_deviation_max = param.metrics.jacobian_deviation_max;
+        m.virtual_fraction = param.metrics.virtual_fraction;
+        m.flipped = param.metrics.flipped;
+        m.bbox_min = Vec3f(1e30f, 1e30f, 1e30f);
+        m.bbox_max = Vec3f(-1e30f, -1e30f, -1e30f);
+        for (const auto& p : chart.position) {
+            m.bbox_min = Min(m.bbox_min, p);
+            m.bbox_max = Max(m.bbox_max, p);
+        }
+        char name[64];
+        std::snprintf(name, sizeof(name), "/tiles/b%05u-%05zu.tile", brick, out.tile_files.size());
+        std::string path = dir + name;
+        WriteTile(path, tile);
+        out.tile_files.push_back(path);
+        ChartRecord rec;
+        rec.brick = brick;
+        rec.triangles = m.triangle_count;
+        rec.vertices = m.vertex_count;
+        rec.resolution = res;
+        rec.scale = m.scale;
+        rec.area = m.area;
+        rec.area_distortion = m.jacobian_deviation;
+        rec.virtual_fraction = m.virtual_fraction;
+        rec.bbox_min = m.bbox_min;
+        rec.bbox_max = m.bbox_max;
+        out.charts.push_back(rec);
+    }
+    return out;
+}
+
+}  // namespace mebake::stream

@@ -1,0 +1,39 @@
+// Ingest pass 3, per brick: the brick's faces in core -> repair -> charts (discs) ->
+// near-isometric parameterization in the unit square, split and redone while the
+// Jacobian deviation is over the threshold -> point-location grid -> geometry image ->
+// one tile per chart. Runs for many bricks in parallel; each call touches only its
+// own brick's files.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+#include "stream/bake_dir.h"
+#include "stream/repair.h"
+
+namespace mebake::stream {
+
+struct ChartBuildOptions {
+    double texel_size = 0.01;         // 3D size of a light-map texel
+    uint32_t min_resolution = 4;      // texels per chart side, powers of two
+    uint32_t max_resolution = 1024;
+    double max_distortion = 0.05;     // split charts whose Jacobian deviation is above
+    uint32_t max_chart_triangles = 60000;
+    size_t cache_bytes = size_t(8) << 20;  // vertex look-ups for this brick
+};
+
+struct BrickResult {
+    std::vector<ChartRecord> charts;         // in tile order
+    std::vector<std::string> tile_files;     // temporary names, renamed by the caller
+    RepairReport repair;
+    uint64_t splits = 0;                     // charts split for distortion or topology
+    // The brick's repaired surface, for the visibility mesh.
+    std::vector<Vec3f> proxy_positions;
+    std::vector<uint32_t> proxy_triangles;
+};
+
+BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt);
+
+}  // namespace mebake::stream

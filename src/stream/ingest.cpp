@@ -1,0 +1,196 @@
+#include "stream/ingest.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "core/units.h"
+#include "io/byte_stream.h"
+#include "io/chunk_file.h"
+#include "io/mesh_format.h"
+#include "stream/bricks.h"
+#include "stream/chart_builder.h"
+#include "stream/spill.h"
+
+namespace mebake::stream {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double Since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// In-core cost of one brick triangle through repair, charting and parameterization
+// (OpenMesh, Eigen factorizations), measured with /usr/bin/time on the scans; the brick
+// size follows from it and the budget.
+constexpr uint64_t kBytesPerBrickTriangle = 2000;
+
+void PrepareDirectory(const IngestOptions& opt) {
+    const std::string& dir = opt.out_dir;
+    if (fs::exists(dir)) {
+        if (!fs::is_directory(dir)) UsageError("{} exists and is not a directory", dir);
+        if (!fs::is_empty(dir)) {
+            if (!opt.force)
+                UsageError("{} exists and is not empty; pass --force to replace it", dir);
+            if (!IsBakeDirectory(dir))
+                UsageError("{} is not a bake directory; refusing to delete it even with --force",
+                           dir);
+            fs::remove_all(dir);
+        }
+    }
+    fs::create_directories(dir + "/tiles");
+    fs::create_directories(dir + "/bricks");
+}
+
+void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
+    io::ChunkWriter w(ProxyPath(dir), io::Tag("PRXY"), 1);
+    uint64_t tris = 0;
+    for (uint32_t b = 0; b < bricks; ++b) {
+        char name[48];
+        std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
+        std::string part = dir + name;
+        if (!fs::exists(part)) continue;
+        io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
+        auto pos = r.Read(io::Tag("PPOS"));
+        auto tri = r.Read(io::Tag("PTRI"));
+        tris += tri.size() / 12;
+        w.Add(io::Tag("PPOS"), b, pos);
+        w.Add(io::Tag("PTRI"), b, tri);
+    }
+    w.Finish();
+    m->proxy_triangles = tris;
+    m->proxy_deviation = 0;  // the full repaired mesh
+}
+
+}  // namespace
+
+Manifest Ingest(const IngestOptions& opt) {
+    if (opt.inputs.empty()) UsageError("no input mesh");
+    if (std::count(opt.inputs.begin(), opt.inputs.end(), "-") > 1)
+        UsageError("stdin ('-') can be read only once");
+    PrepareDirectory(opt);
+    const std::string& dir = opt.out_dir;
+    ThreadLimit limit(opt.threads);
+    const int threads = MaxThreads();
+    Manifest m;
+    m.memory_budget = opt.memory;
+    m.max_distortion = opt.max_distortion;
+
+    // Pass 1: spill.
+    auto t0 = Clock::now();
+    Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(96) << 20));
+    for (const auto& path : opt.inputs) {
+        auto in = io::InputStream::Open(path);
+        io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
+        spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
+        io::ReadMesh(*in, format, spill.BeginInput(path));
+    }
+    const SpillResult& sr = spill.Finish();
+    for (const auto& in : sr.inputs) {
+        InputRecord r;
+        r.path = in.source;
+        r.bytes = in.bytes_read;
+        r.vertices = in.vertex_count;
+        r.triangles = in.face_count;
+        r.first_vertex = in.first_vertex;
+        r.first_face = in.first_face;
+        r.has_colors = in.has_colors;
+        r.materials = in.materials;
+        r.mtllibs = in.mtllibs;
+        m.inputs.push_back(r);
+    }
+    m.vertex_count = sr.vertex_count;
+    m.face_count = sr.face_count;
+    m.bbox_min = sr.bbox_min;
+    m.bbox_max = sr.bbox_max;
+    m.timings.emplace_back("spill", Since(t0));
+    if (sr.face_count == 0) InputError({opt.inputs[0]}, "the input has no faces to bake onto");
+    spdlog::info("spilled {} vertices, {} triangles in {}", FormatCount(double(sr.vertex_count)),
+                 FormatCount(double(sr.face_count)), FormatSeconds(Since(t0)));
+    m.state = "spilled";
+
+    // Pass 2: bricks.
+    auto t1 = Clock::now();
+    BinOptions bopt;
+    bopt.max_faces = std::clamp<uint64_t>(opt.memory / (uint64_t(threads) * kBytesPerBrickTriangle),
+                                          20000, 400000);
+    bopt.cache_bytes = std::min<uint64_t>(opt.memory / 8, uint64_t(64) << 20);
+    BrickPlan plan = BinFaces(dir, sr, bopt);
+    m.brick_faces = bopt.max_faces;
+    m.brick_count = uint32_t(plan.bricks.size());
+    m.surface_area = plan.surface_area;
+    m.texel_size = opt.texel_size > 0
+                       ? opt.texel_size
+                       : std::sqrt(plan.surface_area /
+                                   (0.5 * double(opt.lightmap_resolution) * opt.lightmap_resolution));
+    m.timings.emplace_back("bricks", Since(t1));
+    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {}", plan.bricks.size(),
+                 FormatCount(double(bopt.max_faces)), m.texel_size, FormatSeconds(Since(t1)));
+
+    // Pass 3: charts, bricks in parallel (each writes only its own files).
+    auto t2 = Clock::now();
+    ChartBuildOptions copt;
+    copt.texel_size = m.texel_size;
+    copt.max_distortion = opt.max_distortion;
+    copt.cache_bytes = std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(threads)));
+    std::vector<BrickResult> results(plan.bricks.size());
+    std::atomic<uint32_t> done{0};
+    const bool tty = StderrIsTerminal();
+    ParallelFor(0, int64_t(plan.bricks.size()), [&](int64_t b) {
+        BrickResult r = BuildBrickCharts(dir, uint32_t(b), copt);
+        // The brick's visibility part goes to disk now, so memory does not accumulate.
+        {
+            char name[48];
+            std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", uint32_t(b));
+            io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
+            w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
+            w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
+            w.Finish();
+            std::vector<Vec3f>().swap(r.proxy_positions);
+            std::vector<uint32_t>().swap(r.proxy_triangles);
+        }
+        results[size_t(b)] = std::move(r);
+        uint32_t n = ++done;
+        if (tty)
+            std::fprintf(stderr, "\r  charts: brick %u/%zu (%s)   ", n, plan.bricks.size(),
+                         FormatSeconds(Since(t2)).c_str());
+    });
+    if (tty) std::fprintf(stderr, "\n");
+    uint64_t splits = 0, holes = 0;
+    for (auto& r : results) {
+        for (size_t k = 0; k < r.charts.size(); ++k) {
+            uint32_t id = uint32_t(m.charts.size());
+            fs::rename(r.tile_files[k], TilePath(dir, id));
+            m.charts.push_back(r.charts[k]);
+        }
+        splits += r.splits;
+        holes += r.repair.holes_filled;
+    }
+    m.timings.emplace_back("charts", Since(t2));
+    spdlog::info("{} charts ({} splits, {} holes filled) in {}", m.charts.size(), splits, holes,
+                 FormatSeconds(Since(t2)));
+
+    // Pass 4: the visibility mesh.
+    auto t3 = Clock::now();
+    WriteProxy(dir, m.brick_count, &m);
+    m.timings.emplace_back("proxy", Since(t3));
+
+    // The spill's face list and brick files are not needed any more.
+    fs::remove_all(dir + "/bricks");
+    fs::remove(Spill::FacesPath(dir));
+    fs::remove(OwnersPath(dir));
+    m.state = "ingested";
+    m.timings.emplace_back("total", Since(t0));
+    WriteManifest(dir, m);
+    return m;
+}
+
+}  // namespace mebake::stream

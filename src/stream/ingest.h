@@ -1,0 +1,34 @@
+// `mebake ingest`: meshes of any size, from files or a pipe, into a bake directory of
+// chart tiles, in memory bounded by the budget (DESIGN.md sections 1-4):
+//   pass 1 spill     vertices and faces to flat files (spill.h)
+//   pass 2 bricks    faces binned by Morton order into bricks that fit the budget (bricks.h)
+//   pass 3 charts    per brick in parallel: repair, charts, parameterization, tiles
+//                    (chart_builder.h)
+//   pass 4 proxy     the visibility mesh, one chunk per brick (proxy.bin)
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/mesh_stream.h"
+#include "stream/bake_dir.h"
+
+namespace mebake::stream {
+
+struct IngestOptions {
+    std::vector<std::string> inputs;          // paths; "-" is stdin (at most once)
+    std::optional<io::MeshFormat> format;     // for stdin
+    std::string out_dir;
+    uint64_t memory = uint64_t(1) << 30;      // the budget, bytes
+    int threads = 0;                          // 0: all cores
+    double texel_size = 0;                    // 0: from lightmap_resolution
+    uint32_t lightmap_resolution = 2048;      // atlas side the texel size aims at
+    double max_distortion = 0.05;             // Jacobian deviation that splits a chart
+    bool force = false;                       // replace an existing bake directory
+};
+
+Manifest Ingest(const IngestOptions& opt);
+
+}  // namespace mebake::stream

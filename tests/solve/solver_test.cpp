@@ -1,0 +1,337 @@
+// The solver against answers known in closed form (issue: "Done when"): Lambert's formula
+// under an unoccluded light, the parallel-squares form factor, the furnace, a closed cube
+// with a small emitter, an occluder's umbra and penumbra, and thread-count determinism.
+#include "solve/solver.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <numbers>
+
+#include "core/parallel.h"
+#include "solve/direct.h"
+#include "solve/polygon_light.h"
+#include "solve/visibility.h"
+
+namespace mebake::solve {
+namespace {
+
+using Surface = std::function<Vec3d(double, double)>;
+
+// A parametric patch as a chart: its geometry image at `res` x `res` texels and its
+// triangles for visibility.
+struct Patch {
+    SolveChart chart;
+    std::vector<float> xyz;
+    std::vector<uint32_t> tris;
+};
+
+Patch MakePatch(const Surface& f, int res, uint32_t material, double scale) {
+    Patch p;
+    auto& img = p.chart.geometry;
+    img.resolution = uint32_t(res);
+    int levels = 0;
+    while ((1 << levels) < res) ++levels;
+    img.levels.resize(size_t(levels) + 1);
+    auto& fine = img.levels.back();
+    fine.resize(size_t(res) * res);
+    const double h = 1.0 / res, e = 1e-5;
+    for (int j = 0; j < res; ++j) {
+        for (int i = 0; i < res; ++i) {
+            double u = (i + 0.5) * h, v = (j + 0.5) * h;
+            Vec3d pu = (f(u + e, v) - f(u - e, v)) / (2 * e);
+            Vec3d pv = (f(u, v + e) - f(u, v - e)) / (2 * e);
+            Vec3d n = Cross(pu, pv);
+            stream::GeometryTexel& t = fine[size_t(j) * res + i];
+            t.position = Vec3f(f(u, v));
+            t.normal = Vec3f(Normalize(n));
+            t.vis_point = t.position;
+            t.color = Vec3f(-1, -1, -1);
+            t.area = float(Length(n) * h * h);
+            t.coverage = 1;
+            t.radius = float(0.75 * h * (Length(pu) + Length(pv)));
+            t.material = material;
+        }
+    }
+    img.BuildPyramid();
+    p.chart.scale = scale;
+    // Visibility mesh: the (res+1)^2 grid of corners.
+    for (int j = 0; j <= res; ++j)
+        for (int i = 0; i <= res; ++i) {
+            Vec3d q = f(i * h, j * h);
+            p.xyz.insert(p.xyz.end(), {float(q.x), float(q.y), float(q.z)});
+        }
+    for (int j = 0; j < res; ++j)
+        for (int i = 0; i < res; ++i) {
+            uint32_t a = uint32_t(j * (res + 1) + i), b = a + 1, c = a + uint32_t(res) + 1, d = c + 1;
+            p.tris.insert(p.tris.end(), {a, b, d, a, d, c});
+        }
+    return p;
+}
+
+struct TestScene {
+    Scene scene;
+    std::vector<SolveChart> charts;
+    VisibilityScene vis;
+    void Add(const Patch& p) {
+        charts.push_back(p.chart);
+        vis.AddTriangles(p.xyz, p.tris, "patch");
+    }
+};
+
+Material Mat(float albedo, float emission = 0) {
+    Material m;
+    m.albedo = Vec3f(albedo, albedo, albedo);
+    m.emission = Vec3f(emission, emission, emission);
+    m.use_vertex_colors = false;
+    return m;
+}
+
+// Irradiance n . E at chart point (u, v) for colour 0.
+double Irradiance(const Solver& s, uint32_t chart, double u, double v, const Vec3d& n) {
+    float val[9];
+    s.fields()[chart].EvalValue(u, v, val);
+    return n.x * val[0] + n.y * val[1] + n.z * val[2];
+}
+
+TEST(Solver, UnoccludedSquareLightMatchesLambert) {
+    TestScene ts;
+    ts.scene.per_input = {{Mat(0.0f)}};
+    PolygonLight light;
+    // A 1 x 1 light at height 1 over the centre of a 4 x 4 floor, facing down.
+    light.vertices = {{-0.5, 1, -0.5}, {0.5, 1, -0.5}, {0.5, 1, 0.5}, {-0.5, 1, 0.5}};
+    light.radiance = {1, 1, 1};
+    ts.scene.lights.push_back(light);
+    ASSERT_LT(PolygonNormal(light.vertices).y, 0) << "light must face down";
+    ts.Add(MakePatch([](double u, double v) { return Vec3d(4 * u - 2, 0, 2 - 4 * v); }, 64, 0, 4));
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.tolerance = 1e-3;
+    opt.settings.max_bounces = 0;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    uint64_t state = 12345;
+    auto rnd = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return double(state >> 11) / double(1ull << 53);
+    };
+    double worst = 0;
+    for (int k = 0; k < 1000; ++k) {
+        double u = rnd(), v = rnd();
+        Vec3d x(4 * u - 2, 0, 2 - 4 * v);
+        double exact = IrradianceClipped(light.vertices, 1.0, x, Vec3d(0, 1, 0));
+        double got = Irradiance(solver, 0, u, v, Vec3d(0, 1, 0));
+        worst = std::max(worst, std::abs(got - exact) / exact);
+    }
+    EXPECT_LT(worst, 0.005) << "worst relative error over 1000 random points";
+}
+
+TEST(Solver, ParallelUnitSquaresFormFactor) {
+    TestScene ts;
+    // Input 0: the emitter (radiosity 1 = pi x radiance 1/pi), input 1: a black receiver.
+    ts.scene.per_input = {{Mat(0.0f, float(1 / std::numbers::pi))}, {Mat(0.0f)}};
+    // Emitter at y = 1 facing down; receiver at y = 0 facing up.
+    ts.Add(MakePatch([](double u, double v) { return Vec3d(u, 1, v); }, 32, 0 << 16, 1));
+    ts.Add(MakePatch([](double u, double v) { return Vec3d(u, 0, 1 - v); }, 32, 1 << 16, 1));
+    ts.vis.Commit();
+    ASSERT_LT(ts.charts[0].geometry.At(0, 0, 0).normal.y, 0);
+    ASSERT_GT(ts.charts[1].geometry.At(0, 0, 0).normal.y, 0);
+    SolveOptions opt;
+    opt.settings.max_bounces = 1;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    // Form factor = mean irradiance / emitter radiosity; radiosity B = emission as given.
+    double sum = 0;
+    const int n = 100;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            sum += Irradiance(solver, 1, (i + 0.5) / n, (j + 0.5) / n, Vec3d(0, 1, 0));
+    double f = sum / (n * n);
+    EXPECT_NEAR(f, 0.19982, 0.01 * 0.19982);
+}
+
+// The six faces of a cube mapped onto a sphere of radius r, wound so normals face inward.
+std::vector<Surface> SphereInterior(double r) {
+    std::vector<Surface> faces;
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int sign = -1; sign <= 1; sign += 2) {
+            Surface f = [=](double u, double v) {
+                double a = 2 * u - 1, b = 2 * v - 1;
+                Vec3d p;
+                p[axis] = sign;
+                p[(axis + 1) % 3] = a;
+                p[(axis + 2) % 3] = b;
+                return Normalize(p) * r;
+            };
+            // Flip u when the parameterization's normal points outward.
+            Vec3d c = f(0.5, 0.5);
+            Vec3d n = Cross(f(0.51, 0.5) - f(0.49, 0.5), f(0.5, 0.51) - f(0.5, 0.49));
+            if (Dot(n, c) > 0) faces.push_back([f](double u, double v) { return f(1 - u, v); });
+            else faces.push_back(f);
+        }
+    }
+    return faces;
+}
+
+class Furnace : public ::testing::TestWithParam<std::tuple<int, float>> {};
+
+TEST_P(Furnace, ConvergesToEmissionOverOneMinusAlbedo) {
+    const auto [order, rho] = GetParam();
+    TestScene ts;
+    const float le = 1.0f;  // radiance; Be = pi Le
+    ts.scene.per_input = {{Mat(rho, le)}};
+    const double r = 1.0;
+    for (const auto& f : SphereInterior(r)) ts.Add(MakePatch(f, 16, 0, std::sqrt(4 * std::numbers::pi / 6)));
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.order = order;
+    opt.settings.max_bounces = 400;
+    opt.settings.stop_fraction = 2e-4;
+    opt.batch_fraction = 0;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    const double be = std::numbers::pi * le, expected = be / (1 - rho);
+    double worst = 0;
+    for (uint32_t c = 0; c < ts.charts.size(); ++c) {
+        for (int k = 0; k < 50; ++k) {
+            double u = (k % 7 + 0.5) / 7, v = (k / 7 % 7 + 0.5) / 7;
+            auto smp = stream::SampleBilinear(ts.charts[c].geometry, ts.charts[c].geometry.finest_level(),
+                                              float(u), float(v));
+            Vec3f b = solver.Radiosity(c, u, v, smp.normal, Vec3f(rho, rho, rho),
+                                       Vec3f(1, 1, 1) * float(be));
+            worst = std::max(worst, std::abs(b.x - expected) / expected);
+        }
+    }
+    EXPECT_LT(worst, 0.01) << "order " << order << " albedo " << rho << ", batches "
+                           << solver.stats().batches << ", stop: " << solver.stats().stop_reason;
+}
+
+INSTANTIATE_TEST_SUITE_P(OrdersAndAlbedos, Furnace,
+                         ::testing::Combine(::testing::Values(0, 1, 2, 3),
+                                            ::testing::Values(0.5f, 0.9f)));
+
+// Faces of the unit cube [0,1]^3 wound inward.
+std::vector<Surface> CubeInterior() {
+    std::vector<Surface> faces;
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int side = 0; side <= 1; ++side) {
+            Surface f = [=](double u, double v) {
+                Vec3d p;
+                p[axis] = side;
+                p[(axis + 1) % 3] = u;
+                p[(axis + 2) % 3] = v;
+                return p;
+            };
+            Vec3d c(0.5, 0.5, 0.5);
+            Vec3d n = Cross(f(1, 0) - f(0, 0), f(0, 1) - f(0, 0));
+            if (Dot(n, c - f(0.5, 0.5)) < 0) faces.push_back([f](double u, double v) { return f(1 - u, v); });
+            else faces.push_back(f);
+        }
+    }
+    return faces;
+}
+
+TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
+    TestScene ts;
+    const float rho = 0.5f;
+    ts.scene.per_input = {{Mat(rho)}};
+    PolygonLight light;  // 0.1 x 0.1, just under the ceiling (y = 1), facing down
+    light.vertices = {{0.45, 0.99, 0.45}, {0.55, 0.99, 0.45}, {0.55, 0.99, 0.55}, {0.45, 0.99, 0.55}};
+    light.radiance = {10, 10, 10};
+    ASSERT_LT(PolygonNormal(light.vertices).y, 0);
+    ts.scene.lights.push_back(light);
+    for (const auto& f : CubeInterior()) ts.Add(MakePatch(f, 32, 0, 1));
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.max_bounces = 200;
+    opt.settings.stop_fraction = 1e-4;
+    opt.settings.tolerance = 0.01;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    const double flux = std::numbers::pi * 10 * 0.01;
+    double sum = 0;
+    const int n = 64;
+    for (uint32_t c = 0; c < 6; ++c) {
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                double u = (i + 0.5) / n, v = (j + 0.5) / n;
+                Vec3d nrm(ts.charts[c].geometry.At(0, 0, 0).normal);
+                sum += Irradiance(solver, c, u, v, nrm);
+            }
+    }
+    const double average = sum / (6.0 * n * n);
+    const double expected = flux / (6 * (1 - rho));
+    EXPECT_NEAR(average, expected, 0.01 * expected);
+    // Energy: what arrived (sum of irradiance) = emitted + reflected; the absorbed part
+    // (1 - rho) of it plus rho x the unshot remainder equals the emitted flux.
+    const double arrived = average * 6;
+    const double absorbed = (1 - rho) * arrived;
+    const double unshot = solver.stats().unshot_power;
+    EXPECT_NEAR(absorbed + unshot, flux, 0.001 * flux + 0.01 * flux)
+        << "absorbed " << absorbed << " unshot " << unshot;
+}
+
+TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
+    TestScene ts;
+    ts.scene.per_input = {{Mat(0.0f)}};
+    PolygonLight light;  // 1 x 1 at y = 2 facing down
+    light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
+    light.radiance = {1, 1, 1};
+    ts.scene.lights.push_back(light);
+    // Floor 6 x 6 at y = 0 (a chart) and a 0.8 x 0.8 occluder at y = 1 (visibility only).
+    ts.Add(MakePatch([](double u, double v) { return Vec3d(6 * u - 3, 0, 3 - 6 * v); }, 128, 0, 6));
+    std::vector<float> occ = {-0.4f, 1, -0.4f, 0.4f, 1, -0.4f, 0.4f, 1, 0.4f, -0.4f, 1, 0.4f};
+    std::vector<uint32_t> occ_tris = {0, 1, 2, 0, 2, 3};
+    ts.vis.AddTriangles(occ, occ_tris, "occluder");
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.max_bounces = 0;
+    opt.settings.tolerance = 2e-3;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    auto at = [&](double x, double z) {
+        return Irradiance(solver, 0, (x + 3) / 6, (3 - z) / 6, Vec3d(0, 1, 0));
+    };
+    const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(1.6, 0, 0), Vec3d(0, 1, 0));
+    for (double x = -0.2; x <= 0.2; x += 0.05)
+        for (double z = -0.2; z <= 0.2; z += 0.05) EXPECT_LT(std::abs(at(x, z)), 1e-3 * lit) << x << "," << z;
+    for (double x : {1.5, 1.8, 2.2, -1.6, -2.5}) {
+        double exact = IrradianceClipped(light.vertices, 1.0, Vec3d(x, 0, 0.1), Vec3d(0, 1, 0));
+        EXPECT_NEAR(at(x, 0.1), exact, 0.005 * exact) << x;
+    }
+    double prev = at(0.3, 0);
+    for (double x = 0.35; x <= 1.3; x += 0.05) {
+        double h = at(x, 0);
+        EXPECT_GE(h, prev - 0.01 * lit) << "penumbra not monotone at x = " << x;
+        prev = h;
+    }
+}
+
+TEST(Solver, BitIdenticalForAnyThreadCount) {
+    auto run = [](int threads) {
+        ThreadLimit limit(threads);
+        TestScene ts;
+        ts.scene.per_input = {{Mat(0.6f)}};
+        PolygonLight light;
+        light.vertices = {{0.4, 0.99, 0.4}, {0.6, 0.99, 0.4}, {0.6, 0.99, 0.6}, {0.4, 0.99, 0.6}};
+        light.radiance = {5, 4, 3};
+        ts.scene.lights.push_back(light);
+        for (const auto& f : CubeInterior()) ts.Add(MakePatch(f, 16, 0, 1));
+        ts.vis.Commit();
+        SolveOptions opt;
+        opt.settings.max_bounces = 4;
+        Solver solver(ts.scene, ts.charts, ts.vis, opt);
+        solver.Run();
+        std::vector<float> all;
+        for (const auto& f : solver.fields()) all.insert(all.end(), f.values().begin(), f.values().end());
+        return all;
+    };
+    auto one = run(1), two = run(2);
+    ASSERT_EQ(one.size(), two.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
+}
+
+}  // namespace
+}  // namespace mebake::solve
