@@ -88,8 +88,9 @@ private:
         std::string_view rest;
         if (!NextLine(rest, false)) {
             InputError({lines_.stream().name(), lines_.offset()},
-                       "file ends after {} of {} {}s announced by the header", i,
-                       what[0] == 'v' ? vertex_total_ : face_total_, what);
+                       "file ends after {} of {} {} announced by the header", i,
+                       what[0] == 'v' ? vertex_total_ : face_total_,
+                       what[0] == 'v' ? "vertices" : "faces");
         }
         return rest;
     }
