@@ -18,6 +18,7 @@
 // extra triangle on a quad diagonal, so three faces share that edge), several
 // components, smooth per-vertex colours.
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/vec.h"
 #include "io/byte_stream.h"
 
@@ -68,6 +69,13 @@ constexpr uint64_t Hash(uint64_t seed, uint64_t a, uint64_t b = 0, uint64_t c = 
     return Mix(h ^ (c + 0x2545f4914f6cdd1dULL));
 }
 
+// One mix round over the arguments: for per-element choices and noise lattices, where
+// Hash's four rounds would dominate the run time.
+constexpr uint64_t Hash1(uint64_t seed, uint64_t a, uint64_t b = 0, uint64_t c = 0) {
+    return Mix(seed ^ (a * 0x9e3779b97f4a7c15ULL) ^ (b * 0xc2b2ae3d27d4eb4fULL) ^
+               (c * 0x165667b19e3779f9ULL));
+}
+
 // [0, 1) from the top 53 bits.
 double Unit(uint64_t h) {
     return double(h >> 11) * 0x1.0p-53;
@@ -87,7 +95,7 @@ double Lerp(double a, double b, double t) {
 // Lattice values are hashed from signed cell coordinates (two's complement, so negative
 // coordinates hash fine).
 double Lattice3(uint64_t seed, int64_t x, int64_t y, int64_t z) {
-    return Signed(Hash(seed, uint64_t(x), uint64_t(y), uint64_t(z)));
+    return Signed(Hash1(seed, uint64_t(x), uint64_t(y), uint64_t(z)));
 }
 
 double ValueNoise3(uint64_t seed, double x, double y, double z) {
@@ -255,8 +263,8 @@ public:
         double disp = 0;
         if (noise_ > 0) {
             disp = noise_ * Fbm3(seed_, d * 1.6 + Vec3d(11.5, 7.25, 3.125), 6);
-            disp +=
-                noise_ * 0.08 * cell_ / radius_ * Signed(Hash(seed_, 0x6a17, v));  // scanner jitter
+            disp += noise_ * 0.08 * cell_ / radius_ *
+                    Signed(Hash1(seed_, 0x6a17, v));  // scanner jitter
         }
         return center_ + d * (radius_ * (1.0 + disp));
     }
@@ -397,7 +405,7 @@ private:
         return noise_ * size_ * base;
     }
     double Jitter(uint64_t v) const {
-        return noise_ > 0 ? noise_ * 0.3 * cell_ * Signed(Hash(seed_, 0x71a, v)) : 0.0;
+        return noise_ > 0 ? noise_ * 0.3 * cell_ * Signed(Hash1(seed_, 0x71a, v)) : 0.0;
     }
 
     int64_t w_, h_;
@@ -624,7 +632,7 @@ void PlanDefects(Component<Surface>& comp, uint64_t holes, uint64_t fins) {
 
 // The diagonal a quad is split along: hashed, like the arbitrary splits of a real scan.
 bool SplitAlong02(uint64_t seed, uint64_t q) {
-    return (Hash(seed, 0xd1a9, q) & 1) == 0;
+    return (Hash1(seed, 0xd1a9, q) & 1) == 0;
 }
 
 // The quad corners that form the diagonal of quad q.
@@ -658,19 +666,35 @@ Vec3d FinVertex(const Component<Surface>& comp, uint64_t q) {
 template <typename Surface>
 void WriteVertices(Component<Surface>& comp, bool colors, PlyOut& out) {
     const Surface& s = comp.surface;
-    uint64_t n = s.VertexCount();
-    Rgb c;
+    const uint64_t n = s.VertexCount();
+    // Noise dominates, so positions are computed in parallel a chunk at a time (each a
+    // pure function of its index: the output does not depend on the thread count).
+    constexpr uint64_t kChunk = 1 << 16;
+    std::vector<Vec3d> pos(std::min(n, kChunk));
+    std::vector<Rgb> rgb(colors ? pos.size() : 0);
+    Rgb none;
     bool any_dups = comp.dups.any();
-    for (uint64_t v = 0; v < n; ++v) {
-        Vec3d p = s.Position(v);
-        if (colors)
-            c = s.Color(p);
-        out.Vertex(p, c);
-        if (any_dups) {
-            bool dup;
-            comp.dups.Out(v, &dup);
-            if (dup)
-                out.Vertex(p, c);
+    for (uint64_t first = 0; first < n; first += kChunk) {
+        uint64_t count = std::min(kChunk, n - first);
+        mebake::ParallelForRange(
+            0, int64_t(count),
+            [&](int64_t lo, int64_t hi) {
+                for (int64_t i = lo; i < hi; ++i) {
+                    pos[size_t(i)] = s.Position(first + uint64_t(i));
+                    if (colors)
+                        rgb[size_t(i)] = s.Color(pos[size_t(i)]);
+                }
+            },
+            4096);
+        for (uint64_t i = 0; i < count; ++i) {
+            Rgb c = colors ? rgb[i] : none;
+            out.Vertex(pos[i], c);
+            if (any_dups) {
+                bool dup;
+                comp.dups.Out(first + i, &dup);
+                if (dup)
+                    out.Vertex(pos[i], c);
+            }
         }
     }
     static constexpr Rgb kFin{200, 40, 40};
@@ -693,7 +717,7 @@ void WriteFaces(Component<Surface>& comp, PlyOut& out) {
         }
         s.Quad(q, v);
         if (any_dups) {
-            uint64_t pick = Hash(comp.seed, 0xc0b1, q);
+            uint64_t pick = Hash1(comp.seed, 0xc0b1, q);
             for (int i = 0; i < 4; ++i) {
                 bool dup;
                 o[i] = comp.vertex_base + comp.dups.Out(v[i], &dup);
