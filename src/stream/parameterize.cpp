@@ -1,0 +1,360 @@
+// Chart parameterization for the Meshed Master Element (see parameterize.h): disc check,
+// LSCM with two far-apart boundary pins, ARAP refinement guarded against flips, unit-square
+// placement, distortion metrics on the final float uv.
+#include "stream/parameterize.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/check.h"
+#include "stream/lscm.h"
+
+namespace mebake::stream {
+
+const char* ParamStatusName(ParamStatus status) {
+    switch (status) {
+    case ParamStatus::kOk:
+        return "ok";
+    case ParamStatus::kEmpty:
+        return "empty";
+    case ParamStatus::kBadIndex:
+        return "bad index";
+    case ParamStatus::kNonFinite:
+        return "non-finite position";
+    case ParamStatus::kNonManifold:
+        return "non-manifold";
+    case ParamStatus::kNotDisc:
+        return "not a disc";
+    case ParamStatus::kDegenerate:
+        return "degenerate";
+    case ParamStatus::kSolverFailed:
+        return "solver failed";
+    case ParamStatus::kFlipped:
+        return "flipped triangles";
+    case ParamStatus::kDistorted:
+        return "distorted";
+    }
+    return "?";
+}
+
+namespace {
+
+constexpr uint32_t kNone = ~uint32_t(0);
+
+DiscCheck Fail(ParamStatus status, std::string message) {
+    DiscCheck c;
+    c.status = status;
+    c.message = std::move(message);
+    return c;
+}
+
+uint32_t Find(std::vector<uint32_t>& parent, uint32_t v) {
+    while (parent[v] != v) {
+        parent[v] = parent[parent[v]];
+        v = parent[v];
+    }
+    return v;
+}
+
+}  // namespace
+
+DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 3>> triangles) {
+    const size_t tri_count = triangles.size();
+    if (tri_count == 0) return Fail(ParamStatus::kEmpty, "no triangles");
+    if (tri_count > (size_t(1) << 30))
+        return Fail(ParamStatus::kBadIndex, "too many triangles for 32-bit half-edge ids");
+    for (size_t t = 0; t < tri_count; ++t) {
+        const auto& f = triangles[t];
+        if (f[0] >= vertex_count || f[1] >= vertex_count || f[2] >= vertex_count)
+            return Fail(ParamStatus::kBadIndex,
+                        fmt::format("triangle {} names a vertex >= {}", t, vertex_count));
+        if (f[0] == f[1] || f[1] == f[2] || f[2] == f[0])
+            return Fail(ParamStatus::kBadIndex, fmt::format("triangle {} repeats a vertex", t));
+    }
+
+    // Half-edge h = 3t + k runs from triangles[t][k] to triangles[t][k+1]. Sorting the
+    // directed edges finds twins; a repeated directed edge means > 2 triangles on an edge
+    // or two neighbours with opposite orientation.
+    const uint32_t half_count = uint32_t(3 * tri_count);
+    auto from = [&](uint32_t h) { return triangles[h / 3][h % 3]; };
+    auto to = [&](uint32_t h) { return triangles[h / 3][(h % 3 + 1) % 3]; };
+    std::vector<uint32_t> order(half_count);
+    std::iota(order.begin(), order.end(), 0u);
+    auto key = [&](uint32_t h) { return (uint64_t(from(h)) << 32) | to(h); };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        const uint64_t ka = key(a), kb = key(b);
+        return ka < kb || (ka == kb && a < b);
+    });
+    for (uint32_t i = 1; i < half_count; ++i)
+        if (key(order[i]) == key(order[i - 1]))
+            return Fail(ParamStatus::kNonManifold,
+                        fmt::format("edge ({}, {}) is used twice in the same direction "
+                                    "(non-manifold edge or inconsistent orientation)",
+                                    from(order[i]), to(order[i])));
+    std::vector<uint32_t> twin(half_count, kNone);
+    for (uint32_t h = 0; h < half_count; ++h) {
+        const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
+        auto it = std::lower_bound(order.begin(), order.end(), want,
+                                   [&](uint32_t x, uint64_t k) { return key(x) < k; });
+        if (it != order.end() && key(*it) == want) twin[h] = *it;
+    }
+
+    // Corners per vertex (CSR), unreferenced vertices, connectivity.
+    std::vector<uint32_t> corner_start(size_t(vertex_count) + 1, 0);
+    for (const auto& f : triangles)
+        for (uint32_t v : f) ++corner_start[v + 1];
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        if (corner_start[v + 1] == 0)
+            return Fail(ParamStatus::kNotDisc, fmt::format("vertex {} is unreferenced", v));
+        corner_start[v + 1] += corner_start[v];
+    }
+    std::vector<uint32_t> corners(half_count);
+    {
+        std::vector<uint32_t> fill(corner_start.begin(), corner_start.end() - 1);
+        for (uint32_t h = 0; h < half_count; ++h) corners[fill[from(h)]++] = h;
+    }
+    std::vector<uint32_t> parent(vertex_count);
+    std::iota(parent.begin(), parent.end(), 0u);
+    for (const auto& f : triangles) {
+        parent[Find(parent, f[1])] = Find(parent, f[0]);
+        parent[Find(parent, f[2])] = Find(parent, f[0]);
+    }
+    const uint32_t root = Find(parent, 0);
+    for (uint32_t v = 1; v < vertex_count; ++v)
+        if (Find(parent, v) != root)
+            return Fail(ParamStatus::kNotDisc, "the chart has several connected components");
+
+    // Vertex manifoldness: the corners around each vertex form a single fan. The corner
+    // whose outgoing half-edge is h continues across twin(h) to the corner whose
+    // outgoing half-edge follows twin(h) in its triangle.
+    auto next_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 1) % 3; };
+    auto prev_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 2) % 3; };
+    uint32_t boundary_half = kNone;
+    uint32_t boundary_count = 0;
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        uint32_t start = corners[corner_start[v]];
+        uint32_t open_fans = 0;
+        for (uint32_t c = corner_start[v]; c < corner_start[v + 1]; ++c) {
+            const uint32_t h = corners[c];  // outgoing from v
+            if (twin[prev_in_tri(h)] == kNone) {  // incoming edge on the boundary
+                ++open_fans;
+                start = h;
+            }
+        }
+        if (open_fans > 1)
+            return Fail(ParamStatus::kNonManifold,
+                        fmt::format("vertex {} joins {} boundary fans", v, open_fans));
+        uint32_t visited = 1;
+        for (uint32_t h = start;;) {
+            if (twin[h] == kNone) {
+                ++boundary_count;
+                boundary_half = h;
+                break;
+            }
+            h = next_in_tri(twin[h]);
+            if (h == start) break;
+            if (++visited > corner_start[v + 1] - corner_start[v]) break;
+        }
+        if (visited != corner_start[v + 1] - corner_start[v])
+            return Fail(ParamStatus::kNonManifold,
+                        fmt::format("vertex {} is pinched (its triangles form several fans)", v));
+    }
+    if (boundary_count == 0) return Fail(ParamStatus::kNotDisc, "closed surface (no boundary)");
+
+    // Boundary loops: each boundary vertex has one outgoing boundary half-edge.
+    std::vector<uint32_t> boundary_out(vertex_count, kNone);
+    for (uint32_t h = 0; h < half_count; ++h)
+        if (twin[h] == kNone) boundary_out[from(h)] = h;
+    DiscCheck result;
+    for (uint32_t h = boundary_half;;) {
+        result.boundary.push_back(from(h));
+        h = boundary_out[to(h)];
+        if (h == boundary_half) break;
+        if (result.boundary.size() > boundary_count) break;  // cannot happen once manifold
+    }
+    if (result.boundary.size() != boundary_count)
+        return Fail(ParamStatus::kNotDisc,
+                    fmt::format("several boundary loops (one has {} of {} boundary edges)",
+                                result.boundary.size(), boundary_count));
+    const int64_t edges = (int64_t(half_count) + boundary_count) / 2;
+    const int64_t euler = int64_t(vertex_count) - edges + int64_t(tri_count);
+    if (euler != 1)
+        return Fail(ParamStatus::kNotDisc,
+                    fmt::format("Euler characteristic {} (a disc has 1): the chart has handles",
+                                euler));
+    return result;
+}
+
+void MeasureDistortion(std::span<const Vec3f> position,
+                       std::span<const std::array<uint32_t, 3>> triangles,
+                       std::span<const Vec2f> uv, ChartParam* out) {
+    const size_t tri_count = triangles.size();
+    std::vector<double> area_3d(tri_count), area_uv(tri_count);
+    std::vector<FlatTriangle> flat(tri_count);
+    double sum_3d = 0, sum_uv = 0;
+    for (size_t t = 0; t < tri_count; ++t) {
+        const auto& f = triangles[t];
+        flat[t] = FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]),
+                                  Vec3d(position[f[2]]));
+        const Vec3d p0(position[f[0]]);
+        area_3d[t] = 0.5 * Length(Cross(Vec3d(position[f[1]]) - p0, Vec3d(position[f[2]]) - p0));
+        const Vec2d q0(uv[f[0]].x, uv[f[0]].y), q1(uv[f[1]].x, uv[f[1]].y),
+            q2(uv[f[2]].x, uv[f[2]].y);
+        area_uv[t] = 0.5 * Cross(q1 - q0, q2 - q0);
+        sum_3d += area_3d[t];
+        sum_uv += area_uv[t];
+    }
+    ParamMetrics& m = out->metrics;
+    m.area_3d = sum_3d;
+    m.virtual_fraction = 1 - sum_uv;
+    out->scale = sum_uv > 0 ? std::sqrt(sum_3d / sum_uv) : 0;
+    const double s2 = out->scale * out->scale;
+    out->area_ratio.assign(tri_count, 0.f);
+
+    double misplaced = 0, conformal_sum = 0, conformal_weight = 0;
+    m.jacobian_deviation_max = 0;
+    m.conformal_max = 1;
+    std::vector<std::pair<double, double>> weighted_dev;  // (|r - 1|, A_T)
+    weighted_dev.reserve(tri_count);
+    for (size_t t = 0; t < tri_count; ++t) {
+        misplaced += std::abs(area_3d[t] - s2 * area_uv[t]);
+        if (area_uv[t] > 0 && s2 > 0) {
+            const double r = area_3d[t] / (s2 * area_uv[t]);
+            out->area_ratio[t] = float(r);
+            if (area_3d[t] > 0) {
+                m.jacobian_deviation_max = std::max(m.jacobian_deviation_max, std::abs(r - 1));
+                weighted_dev.emplace_back(std::abs(r - 1), area_3d[t]);
+            }
+        } else if (area_3d[t] > 0) {
+            weighted_dev.emplace_back(1.0, area_3d[t]);
+            m.jacobian_deviation_max = std::max(m.jacobian_deviation_max, 1.0);
+        }
+        // Singular values of the 2x2 Jacobian J = [[a, b], [c, d]] (flat frame -> uv).
+        const FlatTriangle& ft = flat[t];
+        if (ft.area == 0) continue;
+        double a = 0, b = 0, c = 0, d = 0;
+        for (int j = 0; j < 3; ++j) {
+            const Vec2f& p = uv[triangles[t][j]];
+            a += p.x * ft.grad[j].x;
+            b += p.x * ft.grad[j].y;
+            c += p.y * ft.grad[j].x;
+            d += p.y * ft.grad[j].y;
+        }
+        const double q = std::hypot(0.5 * (a + d), 0.5 * (c - b));
+        const double r = std::hypot(0.5 * (a - d), 0.5 * (c + b));
+        const double sigma1 = q + r, sigma2 = std::abs(q - r);
+        const double ratio = sigma2 > 0 ? sigma1 / sigma2 : 1e30;
+        conformal_sum += ratio * ft.area;
+        conformal_weight += ft.area;
+        m.conformal_max = std::max(m.conformal_max, ratio);
+    }
+    m.jacobian_deviation_mean = sum_3d > 0 ? misplaced / sum_3d : 0;
+    m.conformal_mean = conformal_weight > 0 ? conformal_sum / conformal_weight : 1;
+    std::sort(weighted_dev.begin(), weighted_dev.end());
+    m.jacobian_deviation_p95 = 0;
+    double acc = 0;
+    for (const auto& [dev, w] : weighted_dev) {
+        acc += w;
+        m.jacobian_deviation_p95 = dev;
+        if (acc >= 0.95 * sum_3d) break;
+    }
+}
+
+ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) {
+    ChartParam out;
+    const uint32_t vertex_count = uint32_t(chart.vertex_count());
+    if (chart.vertex_count() > kNone) {
+        out.status = ParamStatus::kBadIndex;
+        out.message = "too many vertices for 32-bit indices";
+        return out;
+    }
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        const Vec3f& p = chart.position[v];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+            out.status = ParamStatus::kNonFinite;
+            out.message = fmt::format("vertex {} has a non-finite position", v);
+            return out;
+        }
+    }
+    DiscCheck disc = CheckDisc(vertex_count, chart.triangles);
+    if (disc.status != ParamStatus::kOk) {
+        out.status = disc.status;
+        out.message = std::move(disc.message);
+        return out;
+    }
+
+    const std::vector<FlatTriangle> flat = FlattenTriangles(chart.position, chart.triangles);
+    double total_area = 0;
+    for (const FlatTriangle& ft : flat) total_area += ft.area;
+    if (!(total_area > 0)) {
+        out.status = ParamStatus::kDegenerate;
+        out.message = "all triangles are degenerate";
+        return out;
+    }
+
+    // Pins: a far-apart pair of boundary vertices (double sweep, ties to the first).
+    auto farthest = [&](uint32_t from) {
+        const Vec3d p(chart.position[from]);
+        uint32_t best = disc.boundary[0];
+        double best_d = -1;
+        for (uint32_t v : disc.boundary) {
+            const Vec3d e = Vec3d(chart.position[v]) - p;
+            if (Dot(e, e) > best_d) {
+                best_d = Dot(e, e);
+                best = v;
+            }
+        }
+        return best;
+    };
+    const uint32_t pin0 = farthest(disc.boundary[0]);
+    const uint32_t pin1 = farthest(pin0);
+    if (pin0 == pin1) {
+        out.status = ParamStatus::kDegenerate;
+        out.message = "all boundary vertices coincide";
+        return out;
+    }
+    const double pin_distance =
+        Length(Vec3d(chart.position[pin1]) - Vec3d(chart.position[pin0]));
+
+    std::vector<Vec2d> uv;
+    if (!SolveLscm(flat, chart.triangles, vertex_count, pin0, pin1, pin_distance, &uv)) {
+        out.status = ParamStatus::kSolverFailed;
+        out.message = "LSCM factorization failed";
+        return out;
+    }
+    out.metrics.lscm_flipped = CountFlips(uv, chart.triangles);
+    if (options.arap) {
+        const ArapReport report = RefineArap(flat, chart.triangles, pin0, options.arap_options, &uv);
+        out.metrics.arap_iterations = report.iterations;
+        out.metrics.arap_stopped_by_flip = report.stopped_by_flip;
+    }
+
+    const SquareFit fit = FitUnitSquare(uv, options.margin, options.objective);
+    out.uv.resize(vertex_count);
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        const Vec2d q = fit.Apply(uv[v]);
+        out.uv[v] = Vec2f(std::clamp(float(q.x), 0.f, 1.f), std::clamp(float(q.y), 0.f, 1.f));
+    }
+    MeasureDistortion(chart.position, chart.triangles, out.uv, &out);
+    std::vector<Vec2d> final_uv(vertex_count);
+    for (uint32_t v = 0; v < vertex_count; ++v) final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
+    out.metrics.flipped = CountFlips(final_uv, chart.triangles);
+
+    if (out.metrics.flipped > 0) {
+        out.status = ParamStatus::kFlipped;
+        out.message = fmt::format("{} flipped uv triangles", out.metrics.flipped);
+    } else if (out.metrics.jacobian_deviation_mean > options.max_jacobian_deviation) {
+        out.status = ParamStatus::kDistorted;
+        out.message = fmt::format("Jacobian deviation {:.4f} > {:.4f}",
+                                  out.metrics.jacobian_deviation_mean,
+                                  options.max_jacobian_deviation);
+    } else {
+        out.status = ParamStatus::kOk;
+    }
+    return out;
+}
+
+}  // namespace mebake::stream

@@ -1,0 +1,109 @@
+// Turns one chart (a topological disc) into a Meshed Master Element parameterization:
+// a near-isometric map with natural boundaries, placed in the unit square by a similarity.
+// Method: LSCM (Lévy et al. 2002, lscm.h), refined by ARAP local/global iterations
+// (Liu et al. 2008, arap.h), then rotating calipers + uniform scale (square_fit.h).
+// Master element background: the seed paper, section 3.1 step 3.
+//
+// Definitions used by the metrics (A_T = 3D area, a_T = uv area of triangle T, s = scale):
+//   s          = sqrt(sum A_T / sum a_T), 3D length per uv unit, so that the unit square
+//                stands for s^2 of surface and the mean area ratio is exactly 1.
+//   r_T        = A_T / (s^2 a_T), the area ratio (Jacobian determinant relative to s^2).
+//   deviation  = |r_T - 1| per triangle.
+//   jacobian_deviation_mean = sum_T |A_T - s^2 a_T| / sum_T A_T: the fraction of the
+//                surface's area the constant-Jacobian master element misplaces (the
+//                uv-area-weighted mean of |r_T - 1|).
+//   jacobian_deviation_p95  = 95th percentile of |r_T - 1| weighted by A_T.
+//   conformal ratio = sigma1 / sigma2 >= 1 of the triangle's Jacobian (1 = no shear).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+#include "stream/arap.h"
+#include "stream/square_fit.h"
+#include "stream/trimesh.h"
+
+namespace mebake::stream {
+
+enum class ParamStatus {
+    kOk,
+    // The input is not a valid disc; uv is empty. The caller splits or discards the chart.
+    kEmpty,         // no triangles
+    kBadIndex,      // a triangle names a vertex that does not exist, or one vertex twice
+    kNonFinite,     // a position is NaN or infinite
+    kNonManifold,   // an edge with > 2 triangles, inconsistent orientation, or a pinched vertex
+    kNotDisc,       // several components, unreferenced vertices, no boundary (closed),
+                    // several boundary loops, or handles (Euler characteristic != 1)
+    kDegenerate,    // zero total area
+    kSolverFailed,  // the sparse factorization failed
+    // A parameterization was computed (uv, metrics filled) but the chart should be split.
+    kFlipped,       // some uv triangles are flipped or degenerate
+    kDistorted,     // jacobian_deviation_mean above ParamOptions::max_jacobian_deviation
+};
+
+const char* ParamStatusName(ParamStatus status);
+// True when uv, scale and metrics are filled in (kOk, kFlipped, kDistorted).
+inline bool HasUv(ParamStatus s) {
+    return s == ParamStatus::kOk || s == ParamStatus::kFlipped || s == ParamStatus::kDistorted;
+}
+
+struct ParamOptions {
+    bool arap = true;            // refine LSCM with ARAP (off: plain LSCM)
+    ArapOptions arap_options;
+    double margin = 1.0 / 64;    // free band around the chart in the square
+    SquareFitObjective objective = SquareFitObjective::kMinLongerSide;
+    // Split threshold on jacobian_deviation_mean (see the header comment). The seed paper
+    // used 1%. Measured on real scan charts this is reached by ARAP at a chart's normal
+    // variation of ~TODO degrees.
+    double max_jacobian_deviation = 0.01;
+};
+
+struct ParamMetrics {
+    uint32_t flipped = 0;         // uv triangles not strictly counter-clockwise (final float uv)
+    uint32_t lscm_flipped = 0;    // the same for the LSCM stage
+    int arap_iterations = 0;
+    bool arap_stopped_by_flip = false;
+    double area_3d = 0;
+    double jacobian_deviation_mean = 0;
+    double jacobian_deviation_p95 = 0;
+    double jacobian_deviation_max = 0;  // over triangles with 3D area > 0
+    double conformal_mean = 1;          // 3D-area-weighted mean of sigma1 / sigma2
+    double conformal_max = 1;
+    double virtual_fraction = 1;        // 1 - uv area of the chart
+};
+
+struct ChartParam {
+    ParamStatus status = ParamStatus::kEmpty;
+    std::string message;           // why, when status is not kOk
+    std::vector<Vec2f> uv;         // per vertex, in [0,1]^2
+    double scale = 0;              // s: 3D length per uv unit
+    std::vector<float> area_ratio; // per triangle r_T; 0 where the uv triangle is flipped
+                                   // or has zero area
+    ParamMetrics metrics;
+};
+
+// Checks the disc precondition: indices in range, edge- and vertex-manifold, consistently
+// oriented, connected, every vertex used, exactly one boundary loop, Euler characteristic
+// 1. On success returns kOk and the boundary loop (vertex indices, in the triangles'
+// winding order); otherwise the status and a message.
+struct DiscCheck {
+    ParamStatus status = ParamStatus::kOk;
+    std::string message;
+    std::vector<uint32_t> boundary;
+};
+DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 3>> triangles);
+
+// Per-triangle area ratios and the summary metrics of a uv map (see the header comment).
+// Fills scale, area_ratio and metrics (except the LSCM/ARAP counters) of *out.
+void MeasureDistortion(std::span<const Vec3f> position,
+                       std::span<const std::array<uint32_t, 3>> triangles,
+                       std::span<const Vec2f> uv, ChartParam* out);
+
+// The whole pipeline. Deterministic: the same input gives the same bytes.
+ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options = {});
+
+}  // namespace mebake::stream
