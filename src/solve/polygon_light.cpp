@@ -1,0 +1,132 @@
+// Lambert's closed form for the vector irradiance of a uniform polygon, with one/two-sided
+// emission and clipping to a receiver's upper half-space. See polygon_light.h.
+#include "solve/polygon_light.h"
+
+#include "core/check.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mebake::solve {
+namespace {
+
+// sum_k theta_k * unit(a_k x e_k), a_k = v_k - x, e_k = v_k+1 - v_k. a x e equals
+// (v_k - x) x (v_k+1 - x) but loses less to cancellation when x is far from the edge.
+// For a polygon wound counter-clockwise seen from x this sum points away from the polygon.
+Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
+    Vec3d sum;
+    for (int k = 0; k < nv; ++k) {
+        const Vec3d& p = v[k];
+        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
+        const Vec3d a = p - x, b = q - x;
+        const Vec3d c = Cross(a, q - p);
+        const double len = Length(c);
+        // len == 0: x is on the edge's line, the edge subtends no solid angle (theta = 0) or x
+        // is on the edge itself (on the emitter's plane, handled by the caller).
+        if (!(len > 0))
+            continue;
+        const double theta = std::atan2(len, Dot(a, b));
+        sum += c * (theta / len);
+    }
+    return sum;
+}
+
+// Signed side of x: +1 in front, -1 behind, 0 on the plane (relative tolerance) or degenerate.
+int Side(std::span<const Vec3d> polygon, const Vec3d& normal, const Vec3d& x) {
+    double scale = 0;
+    Vec3d centroid;
+    for (const Vec3d& v : polygon)
+        centroid += v;
+    centroid = centroid / double(polygon.size());
+    for (const Vec3d& v : polygon)
+        scale = std::max(scale, Length(v - centroid));
+    const double d = Dot(normal, x - centroid);
+    scale = std::max(scale, Length(x - centroid));
+    if (!(std::abs(d) > 1e-14 * scale))
+        return 0;
+    return d > 0 ? 1 : -1;
+}
+
+// Sign that turns the Lambert sum into E for a receiver on side `side`; 0 if no light.
+double Orientation(int side, Emission emission) {
+    if (side == 0)
+        return 0;
+    if (side < 0 && emission == Emission::kFront)
+        return 0;
+    // In front the polygon is counter-clockwise seen from x, so E = -(L/2) sum; behind it is
+    // clockwise and the sign flips.
+    return side > 0 ? -1.0 : 1.0;
+}
+
+}  // namespace
+
+Vec3d PolygonNormal(std::span<const Vec3d> polygon) {
+    Vec3d n;
+    const size_t nv = polygon.size();
+    for (size_t k = 0; k < nv; ++k) {
+        const Vec3d& p = polygon[k];
+        const Vec3d& q = polygon[(k + 1) % nv];
+        n.x += (p.y - q.y) * (p.z + q.z);
+        n.y += (p.z - q.z) * (p.x + q.x);
+        n.z += (p.x - q.x) * (p.y + q.y);
+    }
+    return Normalize(n);
+}
+
+double PolygonArea(std::span<const Vec3d> polygon) {
+    Vec3d sum;
+    const size_t nv = polygon.size();
+    if (nv < 3)
+        return 0;
+    for (size_t k = 1; k + 1 < nv; ++k)
+        sum += Cross(polygon[k] - polygon[0], polygon[k + 1] - polygon[0]);
+    return 0.5 * Length(sum);
+}
+
+Vec3d VectorIrradiance(std::span<const Vec3d> polygon, double radiance, const Vec3d& x,
+                       Emission emission) {
+    CHECK_LE(polygon.size(), size_t(kMaxPolygonVertices));
+    if (polygon.size() < 3)
+        return {};
+    const Vec3d normal = PolygonNormal(polygon);
+    const double sign = Orientation(Side(polygon, normal, x), emission);
+    if (sign == 0)
+        return {};
+    return LambertSum(polygon.data(), int(polygon.size()), x) * (sign * 0.5 * radiance);
+}
+
+double IrradianceClipped(std::span<const Vec3d> polygon, double radiance, const Vec3d& x,
+                         const Vec3d& n, Emission emission) {
+    CHECK_LE(polygon.size(), size_t(kMaxPolygonVertices));
+    if (polygon.size() < 3)
+        return 0;
+    const Vec3d normal = PolygonNormal(polygon);
+    const double sign = Orientation(Side(polygon, normal, x), emission);
+    if (sign == 0)
+        return 0;
+    // Sutherland-Hodgman against {y : (y-x).n >= 0}: each edge emits at most two vertices. A
+    // non-convex polygon may come out with zero-area bridges, which the boundary integral
+    // (Lambert's formula is one) cancels exactly.
+    Vec3d clipped[2 * kMaxPolygonVertices];
+    int nc = 0;
+    const int nv = int(polygon.size());
+    for (int k = 0; k < nv; ++k) {
+        const Vec3d& p = polygon[k];
+        const Vec3d& q = polygon[k + 1 == nv ? 0 : k + 1];
+        const double dp = Dot(p - x, n), dq = Dot(q - x, n);
+        if (dp >= 0)
+            clipped[nc++] = p;
+        if ((dp >= 0) != (dq >= 0)) {
+            const double t = dp / (dp - dq);
+            clipped[nc++] = p + (q - p) * t;
+        }
+    }
+    if (nc < 3)
+        return 0;
+    const double e = Dot(n, LambertSum(clipped, nc, x)) * (sign * 0.5 * radiance);
+    // The clipped part lies in the upper half-space, so the exact value is >= 0; rounding
+    // for grazing configurations can leave a tiny negative number.
+    return std::max(e, 0.0);
+}
+
+}  // namespace mebake::solve

@@ -1,0 +1,48 @@
+// Exact vector irradiance of a uniform planar polygonal emitter: Lambert's formula
+// (J. H. Lambert 1760; in graphics J. Arvo, "The Irradiance Jacobian for Partially Occluded
+// Polyhedral Sources", SIGGRAPH 1994), used for the fully visible direct term (DESIGN.md 3).
+//
+// Convention. E points from the receiver towards the light:
+//   E(x) = integral over the emitter of L cos(theta_y) w / r^2 dA(y),  w = (y-x)/r, r = |y-x|,
+// so the irradiance of a surface at x with normal n (when all of the emitter is above its
+// tangent plane) is n . E(x). This is the DESIGN.md transport
+//   dE(x) = B(y) max(0, (x-y).n(y)) (y-x) / (pi |y-x|^4) dA(y)   with B = pi L.
+// Closed form: E(x) = (L/2) sum_k theta_k g_k, theta_k the angle the edge (v_k, v_k+1)
+// subtends at x and g_k the unit normal of the plane through x and that edge, oriented
+// towards the emitter's front side for a polygon wound counter-clockwise as seen from its
+// front (the side it emits to; front normal = right-hand rule).
+//
+// The polygon must be planar and simple (convex or not), with at most kMaxPolygonVertices
+// vertices (scene loaders reject larger ones). Points on the emitter's plane get 0; so do
+// points behind a one-sided emitter. Nothing here returns NaN for finite input.
+#pragma once
+
+#include "core/vec.h"
+
+#include <span>
+
+namespace mebake::solve {
+
+inline constexpr int kMaxPolygonVertices = 64;
+
+enum class Emission {
+    kFront,  // emits to the half-space its front normal points to
+    kBoth,   // emits to both sides (a double-sided light panel)
+};
+
+// Unit front normal (Newell's method, robust for non-convex polygons); zero if degenerate.
+Vec3d PolygonNormal(std::span<const Vec3d> polygon);
+double PolygonArea(std::span<const Vec3d> polygon);
+
+// E(x) as defined above, not clipped by any receiver tangent plane (E is a field; the
+// receiver's normal enters only at display/shooting time through max(0, n.E)).
+Vec3d VectorIrradiance(std::span<const Vec3d> polygon, double radiance, const Vec3d& x,
+                       Emission emission = Emission::kFront);
+
+// Irradiance of a receiver at x with unit normal n: the emitter is clipped to the receiver's
+// upper half-space {y : (y-x).n >= 0} first, so parts below the horizon do not subtract.
+// Equals the integral of L max(0, cos theta_x) cos theta_y / r^2 over the emitter.
+double IrradianceClipped(std::span<const Vec3d> polygon, double radiance, const Vec3d& x,
+                         const Vec3d& n, Emission emission = Emission::kFront);
+
+}  // namespace mebake::solve

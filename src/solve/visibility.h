@@ -1,0 +1,104 @@
+// The one wrapper over Embree 3 (https://www.embree.org): triangle scenes, batched occlusion
+// queries for segments (the visibility term V(x,y) of the transport, DESIGN.md section 3)
+// and closest-hit queries. Nothing else in mebake includes <embree3/rtcore.h>.
+//
+// What it takes care of, so callers do not have to:
+// - ray masks are compiled into this Embree: every ray gets mask 0xFFFFFFFF;
+// - flush-to-zero / denormals-are-zero are set for the duration of each query call on the
+//   calling thread (TBB workers included) and the caller's MXCSR is restored afterwards, so
+//   float results elsewhere do not depend on which thread traced before;
+// - vertex buffers are allocated by Embree (padded for its 16-byte loads), input is copied;
+// - Embree errors become mebake::Error exceptions naming the call, never silent failures;
+// - a memory monitor counts Embree's bytes (EmbreeMemoryBytes) and can cap them
+//   (SetEmbreeMemoryLimit): a build over the limit throws instead of eating memory.
+// Queries are thread-safe after Commit() and deterministic: each segment's answer depends on
+// that segment only (occlusion is exact per ray; closest hit ties between triangles at the
+// same distance, e.g. a shared edge, may resolve to either).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+namespace mebake::solve {
+
+// The segment org + t*dir, t in [tnear, tfar] (tfar may be +inf for a ray). dir need not be
+// unit length; t is in units of |dir|. Segments with tnear > tfar are never occluded.
+struct Segment {
+    float ox = 0, oy = 0, oz = 0, tnear = 0;
+    float dx = 0, dy = 0, dz = 0, tfar = 0;
+};
+
+inline constexpr uint32_t kNoHit = 0xFFFFFFFFu;
+
+struct Hit {
+    float t = 0;                                  // hit distance (in units of |dir|)
+    float u = 0, v = 0;                           // barycentrics of vertices 1 and 2
+    float ng_x = 0, ng_y = 0, ng_z = 0;           // unnormalized geometric normal (v1-v0)x(v2-v0)
+    uint32_t geom_id = kNoHit, prim_id = kNoHit;  // kNoHit when nothing was hit
+};
+
+enum class BuildQuality { kLow, kMedium, kHigh };
+
+// How batches are traced. All give identical answers; they differ in speed (see
+// bench/embree_rate_bench.cpp for numbers on the target machine).
+enum class TraceMethod {
+    kStream,    // rtcOccluded1M / rtcIntersect1M over chunks of the batch
+    kPacket16,  // rtcOccluded16 / rtcIntersect16 (native on AVX-512)
+    kPacket8,   // rtcOccluded8 / rtcIntersect8
+    kSingle,    // rtcOccluded1 / rtcIntersect1 per segment
+};
+
+struct VisibilityOptions {
+    bool compact = true;  // RTC_SCENE_FLAG_COMPACT: smaller BVH, slightly slower traversal
+    bool robust = true;   // RTC_SCENE_FLAG_ROBUST: watertight, no leaks through shared edges
+    BuildQuality quality = BuildQuality::kMedium;
+    TraceMethod method = TraceMethod::kPacket16;
+    bool coherent = false;  // RTC_INTERSECT_CONTEXT_FLAG_COHERENT (batches of similar rays)
+};
+
+class VisibilityScene {
+public:
+    explicit VisibilityScene(const VisibilityOptions& options = {});
+    ~VisibilityScene();
+    VisibilityScene(const VisibilityScene&) = delete;
+    VisibilityScene& operator=(const VisibilityScene&) = delete;
+
+    // Adds a triangle mesh, copied: positions x,y,z per vertex, indices 3 per triangle.
+    // Returns its geometry id (0, 1, ... in call order). Throws InputError for malformed
+    // input (sizes, indices out of range); triangles with non-finite vertices are ignored.
+    // `name` is used in error messages.
+    uint32_t AddTriangles(std::span<const float> positions, std::span<const uint32_t> indices,
+                          const char* name = "mesh");
+
+    // Builds the BVH. Throws Error if Embree fails (e.g. over the memory limit).
+    void Commit();
+
+    // occluded[i] = 1 if a triangle intersects segment i, else 0. Thread-safe after Commit.
+    void Occluded(std::span<const Segment> segments, std::span<uint8_t> occluded) const;
+    // Same, parallel over chunks of the batch through core/parallel.h.
+    void OccludedParallel(std::span<const Segment> segments, std::span<uint8_t> occluded) const;
+
+    // Closest hit in [tnear, tfar] per segment. Thread-safe after Commit.
+    void Intersect(std::span<const Segment> segments, std::span<Hit> hits) const;
+
+    uint64_t triangle_count() const { return triangles_; }
+    const VisibilityOptions& options() const { return options_; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    VisibilityOptions options_;
+    uint64_t triangles_ = 0;
+    bool committed_ = false;
+    uint32_t geometries_ = 0;
+};
+
+// Bytes Embree holds right now (all scenes of the process), and the largest value seen.
+int64_t EmbreeMemoryBytes();
+int64_t EmbreePeakMemoryBytes();
+// Embree operations that would push EmbreeMemoryBytes() over `bytes` fail with an Error
+// (0 = no limit). Meant for the caller's memory budget (DESIGN.md section 4).
+void SetEmbreeMemoryLimit(int64_t bytes);
+
+}  // namespace mebake::solve
