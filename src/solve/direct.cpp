@@ -13,10 +13,8 @@ namespace mebake::solve {
 
 namespace {
 
-// A point of a polygon, by fan-triangle barycentrics: sample (a, b) in [0,1]^2 of
-// triangle k. Used for deterministic stratified light samples.
+// The point with barycentrics (a, b) in fan triangle `tri` of a polygon.
 Vec3d PolygonPoint(const std::vector<Vec3d>& v, size_t tri, double a, double b) {
-    if (a + b > 1) a = 1 - a, b = 1 - b;
     return v[0] + (v[tri + 1] - v[0]) * a + (v[tri + 2] - v[0]) * b;
 }
 
@@ -59,15 +57,30 @@ DirectLight::DirectLight(const Scene& scene, const VisibilityScene& vis, float r
         Vec3d centre{};
         for (const auto& v : l.vertices) centre += v;
         centre = centre / double(l.vertices.size());
-        // Classification points: vertices pulled 5% toward the centre, and the centre.
-        for (const auto& v : l.vertices) l.classify.push_back(Vec3f(v + (centre - v) * 0.05));
+        // Classification points: vertices pulled 1% toward the centre, and the centre.
+        for (const auto& v : l.vertices) l.classify.push_back(Vec3f(v + (centre - v) * 0.01));
         l.classify.push_back(Vec3f(centre));
-        // Stratified samples: per fan triangle a per_tri x per_tri grid of cell centres.
-        for (size_t t = 0; t + 2 < l.vertices.size(); ++t)
-            for (int a = 0; a < per_tri; ++a)
-                for (int b = 0; b < per_tri; ++b)
-                    l.samples.push_back(Vec3f(PolygonPoint(l.vertices, t, (a + 0.5) / per_tri,
-                                                           (b + 0.5) / per_tri)));
+        // Cells: each fan triangle cut into per_tri^2 congruent triangles.
+        for (size_t t = 0; t + 2 < l.vertices.size(); ++t) {
+            const double k = per_tri;
+            auto at = [&](int a, int b) { return PolygonPoint(l.vertices, t, a / k, b / k); };
+            for (int a = 0; a < per_tri; ++a) {
+                for (int b = 0; a + b < per_tri; ++b) {
+                    l.cells.push_back({at(a, b), at(a + 1, b), at(a, b + 1)});
+                    if (a + b + 2 <= per_tri) l.cells.push_back({at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)});
+                }
+            }
+        }
+        // One sample per cell at a fixed pseudo-random point (an R2 low-discrepancy
+        // sequence): a shadow edge parallel to the cell rows then cuts samples at varied
+        // offsets, so the misclassified parts cancel instead of adding up along the edge.
+        for (size_t c = 0; c < l.cells.size(); ++c) {
+            double a = std::fmod(0.5 + 0.7548776662466927 * double(c + 1), 1.0);
+            double b = std::fmod(0.5 + 0.5698402909980532 * double(c + 1), 1.0);
+            if (a + b > 1) a = 1 - a, b = 1 - b;
+            const auto& t = l.cells[c];
+            l.samples.push_back(Vec3f(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b));
+        }
         lights_.push_back(std::move(l));
     }
     if (sky_.type != Sky::Type::None) {
@@ -77,7 +90,10 @@ DirectLight::DirectLight(const Scene& scene, const VisibilityScene& vis, float r
         for (int a = 0; a < k; ++a) {
             for (int b = 0; b < k; ++b) {
                 double x = 2 * (a + 0.5) / k - 1, y = 2 * (b + 0.5) / k - 1, r, phi;
-                if (std::abs(x) > std::abs(y)) {
+                if (x == 0 && y == 0) {
+                    r = 0;
+                    phi = 0;
+                } else if (std::abs(x) > std::abs(y)) {
                     r = x;
                     phi = std::numbers::pi / 4 * (y / x);
                 } else {
@@ -135,30 +151,35 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             else if (vis > 0) penumbra.push_back(p);
             else fraction[p] = 0;
         }
-        // 2. Penumbra points: the visible fraction of stratified samples.
+        // 2. Penumbra points: the closed form of every cell whose centroid is visible.
         batch.Clear();
         for (size_t p : penumbra) {
             Vec3f o = points[p].vis_point + points[p].normal * offset_;
             for (const auto& s : l.samples) batch.AddSegment(o, s);
         }
         batch.Trace(vis_);
+        const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+        auto add = [&](size_t p, const Vec3d& e) {
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+        };
         at = 0;
         for (size_t p : penumbra) {
-            size_t vis = 0;
-            for (size_t k = 0; k < l.samples.size(); ++k) vis += batch.occluded[at++] ? 0 : 1;
-            fraction[p] = float(vis) / float(l.samples.size());
+            const Vec3d x(points[p].position), n(points[p].normal);
+            Vec3d e{};
+            for (size_t k = 0; k < l.cells.size(); ++k) {
+                if (batch.occluded[at++]) continue;
+                auto clipped = ClipToHalfSpace(l.cells[k], x, n);
+                if (clipped.size() >= 3) e += VectorIrradiance(clipped, 1.0, x, emission);
+            }
+            add(p, e);
         }
-        // 3. Closed form, clipped to the receiver's upper hemisphere.
+        // 3. Fully lit points: the closed form, clipped to the receiver's upper hemisphere.
         for (size_t p = 0; p < points.size(); ++p) {
             if (fraction[p] <= 0) continue;
             const Vec3d x(points[p].position), n(points[p].normal);
             auto clipped = ClipToHalfSpace(l.vertices, x, n);
-            if (clipped.size() < 3) continue;
-            Vec3d e = VectorIrradiance(clipped, 1.0, x,
-                                       l.two_sided ? Emission::kBoth : Emission::kFront) *
-                      double(fraction[p]);
-            for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+            if (clipped.size() >= 3) add(p, VectorIrradiance(clipped, 1.0, x, emission));
         }
     }
 

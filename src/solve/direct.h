@@ -5,6 +5,7 @@
 // fraction, in effect).
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -39,7 +40,10 @@ private:
         Vec3d normal;
         double area;
         std::vector<Vec3f> classify;  // few sample points: corners pulled in, centre
-        std::vector<Vec3f> samples;   // stratified sample points for penumbrae
+        // Penumbrae: the light cut into small triangles, each visible or not as its
+        // centroid is; E sums the closed form of the visible ones.
+        std::vector<std::array<Vec3d, 3>> cells;
+        std::vector<Vec3f> samples;   // the cells' centroids
     };
     const VisibilityScene& vis_;
     std::vector<Light> lights_;

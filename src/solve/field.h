@@ -10,6 +10,7 @@
 // Storage is pooled in flat arrays indexed by node, so memory follows the node count.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

@@ -124,6 +124,15 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
 
     fs::create_directories(opt.dir + "/solve");
     WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity);
+    // Export and render shade with the same materials: keep the scene file beside the
+    // solution (without one, the inputs' materials and the default rig are rebuilt).
+    const std::string kept = opt.dir + "/solve/scene.json";
+    if (!opt.scene_file.empty()) {
+        fs::copy_file(opt.scene_file, kept + ".tmp", fs::copy_options::overwrite_existing);
+        fs::rename(kept + ".tmp", kept);
+    } else {
+        fs::remove(kept);
+    }
 
     nlohmann::json j;
     j["order"] = so.settings.order;

@@ -11,6 +11,7 @@
 #include "solve/direct.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
+#include "solve/shading.h"
 #include "solve/visibility.h"
 
 namespace mebake::solve {
@@ -24,18 +25,15 @@ double Since(Clock::time_point t) {
 
 float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
 
-// sRGB-encoded vertex colour -> linear reflectance.
-float SrgbToLinear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
-
 }  // namespace
 
 struct Solver::Emitter {
     struct Texel {
         Vec3f pos, nrm, vis;
         float area = 0;
-        Vec3f db;  // unshot radiosity
+        float radius = 0;
+        Vec3f db;  // unshot radiosity (area-weighted mean over the texel)
+        float db_max = 0;  // largest luminance of db within the texel
     };
     uint32_t chart = 0;
     std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
@@ -64,29 +62,7 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const 
 }
 
 Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {
-    const Material& m = scene_.MaterialOf(material);
-    Vec3f a = m.albedo;
-    if (m.use_vertex_colors && color.x >= 0) {
-        for (int c = 0; c < 3; ++c)
-            a[c] = std::min(0.99f, SrgbToLinear(color[c]) * m.color_factor);
-    }
-    return a;
-}
-
-Vec3f Solver::Radiosity(uint32_t chart, double u, double v, const Vec3f& normal,
-                        const Vec3f& albedo, const Vec3f& emission) const {
-    float val[9];
-    fields_[chart].EvalValue(u, v, val);
-    Vec3f b = emission;
-    for (int c = 0; c < 3; ++c) {
-        if (opt_.settings.radiosity) {
-            b[c] += std::max(0.f, val[c]);
-        } else {
-            float irr = normal.x * val[3 * c] + normal.y * val[3 * c + 1] + normal.z * val[3 * c + 2];
-            b[c] += albedo[c] * std::max(0.f, irr);
-        }
-    }
-    return b;
+    return SurfaceAlbedo(scene_.MaterialOf(material), color);
 }
 
 void Solver::RefineDirect(uint32_t chart) {
@@ -190,6 +166,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.nrm = g.normal;
             t.vis = g.vis_point;
             t.area = g.area;
+            t.radius = g.radius;
             if (g.area <= 0) continue;
             double u = (i + 0.5) / n, v = (j + 0.5) / n;
             field.EvalUnshot(u, v, val);
@@ -208,6 +185,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 if (first_shot && emissive_[chart]) b += float(std::numbers::pi) * m.emission[c];
                 t.db[c] = b;
             }
+            t.db_max = Luminance(t.db);
         }
     }
     // Coarser samples: area-weighted means.
@@ -222,6 +200,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 const auto& g = sc.geometry.At(l, i, j);
                 t.pos = g.position;
                 t.vis = g.vis_point;
+                t.radius = g.radius;
                 Vec3f nrm{}, db{};
                 float area = 0;
                 for (uint32_t c = 0; c < 4; ++c) {
@@ -229,6 +208,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     area += k.area;
                     nrm += k.nrm * k.area;
                     db += k.db * k.area;
+                    t.db_max = std::max(t.db_max, k.db_max);
                 }
                 t.area = area;
                 t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
@@ -256,10 +236,13 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     const int finest = sc.geometry.finest_level();
     const bool radiosity = opt_.settings.radiosity;
     const float eps = opt_.ray_offset;
+    // Links whose irradiance bound is below this are evaluated where they stand.
+    const double negligible = 1e-3 * opt_.settings.tolerance * reference_;
 
     struct Pair {
-        uint32_t point, texel;
-        Vec3f contribution_dir;  // E contribution per unit radiosity (w * d)
+        uint32_t point;
+        uint32_t texel;
+        Vec3f contribution;  // E per unit radiosity of the texel
     };
     std::vector<ReceiverPoint> pts;
     std::vector<Vec3f> albedo;
@@ -267,61 +250,46 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     std::vector<float> e9, vals, coeffs(size_t(field.stride()));
     SegmentBatch batch;
 
-    for (const Emitter& em : emitters) {
-        const int top = int(em.levels.size()) - 1;
-        std::vector<size_t> stack = {0};
-        while (!stack.empty()) {
-            const size_t n = stack.back();
-            stack.pop_back();
-            const QuadNode node = field.node(n);
-            // Node bounds from the geometry pyramid.
-            Vec3f center;
-            float radius;
-            if (int(node.level) <= finest) {
-                const auto& g = sc.geometry.At(node.level, node.i, node.j);
-                center = g.position;
-                radius = g.radius;
-            } else {
-                auto smp = stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)),
-                                                  float(node.V(0.5)));
-                center = smp.position;
-                radius = float(sc.scale * node.size() * 0.75);
-            }
-            const double dist = double(Length(center - em.center)) - radius - em.radius;
-            const double side = sc.scale * node.size();
-            if (!node.leaf() && (dist <= 0 || side / dist > opt_.receiver_tau)) {
-                for (int c = 3; c >= 0; --c) stack.push_back(size_t(node.first_child + c));
-                continue;
-            }
-            // Emitter level: sample size / distance below tau, capped.
-            int le = top;
-            if (dist > 0) {
-                le = int(std::ceil(std::log2(std::max(1.0, em.scale / (opt_.emitter_tau * dist)))));
-                le = std::clamp(le, std::min(1, top), top);
-            }
-            const auto& texels = em.levels[size_t(le)];
-            const double texel_side = em.scale / double(1u << le);
+    // Receiver node bounds from the geometry pyramid.
+    auto node_bounds = [&](const QuadNode& node, Vec3f* center, float* radius) {
+        if (int(node.level) <= finest) {
+            const auto& g = sc.geometry.At(node.level, node.i, node.j);
+            *center = g.position;
+            *radius = g.radius;
+        } else {
+            auto smp = stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+            *center = smp.position;
+            *radius = float(sc.scale * node.size() * 0.75);
+        }
+    };
 
-            // Receiver points: the node's Gauss points.
-            pts.clear();
-            albedo.clear();
-            const int gl = std::min(finest, int(node.level) + 2);
-            for (int p = 0; p < ng * ng; ++p) {
-                double s, t, w;
-                GaussPoint2D(ng, p, &s, &t, &w);
-                auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-                pts.push_back({smp.position, smp.normal, smp.vis_point});
-                albedo.push_back(Albedo(smp.material, smp.color));
-            }
-            // Candidate pairs and their shadow rays.
-            pairs.clear();
-            batch.Clear();
-            for (uint32_t p = 0; p < pts.size(); ++p) {
-                const ReceiverPoint& rp = pts[p];
-                const Vec3f org = rp.vis_point + rp.normal * eps;
-                for (uint32_t k = 0; k < texels.size(); ++k) {
+    // Evaluates one link: the emitter texels at level `ls` inside region (l, i, j), at the
+    // receiver node's Gauss points; adds the projection to the node's pending set.
+    auto evaluate_link = [&](size_t n, const Emitter& em, int l, uint32_t ri, uint32_t rj, int ls) {
+        const QuadNode node = field.node(n);
+        pts.clear();
+        albedo.clear();
+        const int gl = std::min(finest, int(node.level) + 2);
+        for (int p = 0; p < ng * ng; ++p) {
+            double s, t, w;
+            GaussPoint2D(ng, p, &s, &t, &w);
+            auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
+            pts.push_back({smp.position, smp.normal, smp.vis_point});
+            albedo.push_back(Albedo(smp.material, smp.color));
+        }
+        const auto& texels = em.levels[size_t(ls)];
+        const uint32_t span = 1u << (ls - l), row = 1u << ls;
+        const double texel_side = em.scale / double(row);
+        pairs.clear();
+        batch.Clear();
+        for (uint32_t p = 0; p < pts.size(); ++p) {
+            const ReceiverPoint& rp = pts[p];
+            const Vec3f org = rp.vis_point + rp.normal * eps;
+            for (uint32_t b = 0; b < span; ++b) {
+                for (uint32_t a = 0; a < span; ++a) {
+                    const uint32_t k = (rj * span + b) * row + ri * span + a;
                     const auto& t = texels[k];
-                    if (t.area <= 0 || (t.db.x <= 0 && t.db.y <= 0 && t.db.z <= 0)) continue;
+                    if (t.area <= 0 || t.db_max <= 0) continue;
                     const Vec3d d = Vec3d(t.pos) - Vec3d(rp.position);
                     const double r2 = Dot(d, d);
                     if (r2 < 1e-20) continue;
@@ -330,16 +298,14 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                     if (ce <= 0) continue;                        // emitter faces away
                     Vec3d contrib;
                     if (r2 < 4 * texel_side * texel_side) {
-                        // Near field: the sample as a uniform square, in closed form.
-                        Vec3f tu, tv;
+                        // Near field: the texel as a uniform square, in closed form.
                         const Vec3f nz = t.nrm;
                         const Vec3f ref = std::abs(nz.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
-                        tu = Normalize(Cross(ref, nz));
-                        tv = Cross(nz, tu);
+                        const Vec3f tu = Normalize(Cross(ref, nz)), tv = Cross(nz, tu);
                         const double h = 0.5 * std::sqrt(double(t.area));
-                        const Vec3d c(t.pos), a(tu), b(tv);
-                        const Vec3d quad[4] = {c - a * h - b * h, c + a * h - b * h,
-                                               c + a * h + b * h, c - a * h + b * h};
+                        const Vec3d c(t.pos), au(tu), av(tv);
+                        const Vec3d quad[4] = {c - au * h - av * h, c + au * h - av * h,
+                                               c + au * h + av * h, c - au * h + av * h};
                         auto clipped = ClipToHalfSpace(quad, Vec3d(rp.position), Vec3d(rp.normal));
                         if (clipped.size() < 3) continue;
                         contrib = VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
@@ -350,32 +316,80 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                     batch.AddSegment(org, t.vis + t.nrm * eps);
                 }
             }
-            batch.Trace(vis_);
-            // Accumulate unoccluded pairs in a fixed order.
-            e9.assign(pts.size() * 9, 0.f);
-            for (size_t q = 0; q < pairs.size(); ++q) {
-                if (batch.occluded[q]) continue;
-                const Pair& pr = pairs[q];
-                const auto& t = texels[pr.texel];
-                for (int c = 0; c < 3; ++c)
-                    for (int k = 0; k < 3; ++k)
-                        e9[pr.point * 9 + size_t(3 * c + k)] += t.db[c] * pr.contribution_dir[k];
+        }
+        if (pairs.empty()) return;
+        batch.Trace(vis_);
+        e9.assign(pts.size() * 9, 0.f);
+        for (size_t q = 0; q < pairs.size(); ++q) {
+            if (batch.occluded[q]) continue;
+            const Pair& pr = pairs[q];
+            const Vec3f& db = texels[pr.texel].db;
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < 3; ++k)
+                    e9[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
+        }
+        vals.assign(pts.size() * size_t(blocks), 0.f);
+        for (size_t p = 0; p < pts.size(); ++p) {
+            if (!radiosity) {
+                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
+                continue;
             }
-            vals.assign(pts.size() * size_t(blocks), 0.f);
-            for (size_t p = 0; p < pts.size(); ++p) {
-                if (!radiosity) {
-                    std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
-                    continue;
-                }
-                for (int c = 0; c < 3; ++c) {
-                    const float* e = &e9[p * 9 + size_t(3 * c)];
-                    float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
-                    vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
-                }
+            for (int c = 0; c < 3; ++c) {
+                const float* e = &e9[p * 9 + size_t(3 * c)];
+                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
+                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
             }
-            ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
-            float* pend = field.pending(n);
-            for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        }
+        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+        float* pend = field.pending(n);
+        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+    };
+
+    // Link refinement (hierarchical radiosity): a pair (receiver node, emitter region) is
+    // evaluated when both are small against their distance, or when its irradiance bound
+    // is negligible; otherwise the larger side is subdivided.
+    struct Link {
+        uint32_t node;
+        int level;
+        uint32_t i, j;
+    };
+    std::vector<Link> stack;
+    for (const Emitter& em : emitters) {
+        const int top = int(em.levels.size()) - 1;
+        stack.assign(1, Link{0, 0, 0, 0});
+        while (!stack.empty()) {
+            const Link lk = stack.back();
+            stack.pop_back();
+            const QuadNode node = field.node(lk.node);
+            const auto& et = em.levels[size_t(lk.level)][size_t(lk.j) * (1u << lk.level) + lk.i];
+            if (et.area <= 0 || et.db_max <= 0) continue;
+            Vec3f rc;
+            float rr;
+            node_bounds(node, &rc, &rr);
+            const double dist = double(Length(rc - et.pos)) - rr - et.radius;
+            const double size_r = sc.scale * node.size();
+            const double size_e = em.scale / double(1u << lk.level);
+            const bool recv_can = !node.leaf();
+            const bool emit_can = lk.level < top;
+            const double bound = dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist)
+                                          : 1e300;
+            const bool small = dist > 0 && size_r / dist <= opt_.receiver_tau &&
+                               size_e / dist <= opt_.emitter_tau;
+            if (small || bound < negligible || (!recv_can && !emit_can)) {
+                // Sample the region one level finer than itself when possible.
+                const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
+                evaluate_link(lk.node, em, lk.level, lk.i, lk.j, ls);
+                continue;
+            }
+            const bool split_receiver = recv_can && (!emit_can || size_r >= size_e);
+            if (split_receiver) {
+                for (int c = 3; c >= 0; --c)
+                    stack.push_back(Link{uint32_t(node.first_child + c), lk.level, lk.i, lk.j});
+            } else {
+                for (int c = 3; c >= 0; --c)
+                    stack.push_back(Link{lk.node, lk.level + 1, lk.i * 2 + uint32_t(c & 1),
+                                         lk.j * 2 + uint32_t(c >> 1)});
+            }
         }
     }
     field.PushPending();

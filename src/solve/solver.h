@@ -76,9 +76,6 @@ public:
     // Albedo (linear RGB) of a surface sample, from its material and vertex colour.
     Vec3f Albedo(uint32_t material, const Vec3f& color) const;
 
-    // Radiosity B = Be + rho (n . E)+ at chart point (u, v) with the given normal.
-    Vec3f Radiosity(uint32_t chart, double u, double v, const Vec3f& normal, const Vec3f& albedo,
-                    const Vec3f& emission) const;
 
 private:
     struct Emitter;

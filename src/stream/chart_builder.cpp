@@ -139,7 +139,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     for (const auto& t : mesh.triangles) out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
 
     SegmentOptions sopt;
-    sopt.max_chart_triangles = opt.max_chart_triangles;
+    sopt.max_chart_vertices = opt.max_chart_vertices;
     std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, nullptr);
     uint32_t chart_count = 0;
     for (uint32_t c : chart_of) chart_count = std::max(chart_count, c + 1);

@@ -20,7 +20,7 @@ struct ChartBuildOptions {
     uint32_t min_resolution = 4;      // texels per chart side, powers of two
     uint32_t max_resolution = 1024;
     double max_distortion = 0.05;     // split charts whose Jacobian deviation is above
-    uint32_t max_chart_triangles = 60000;
+    uint32_t max_chart_vertices = 50000;
     size_t cache_bytes = size_t(8) << 20;  // vertex look-ups for this brick
 };
 

@@ -68,21 +68,28 @@ void GeometryImage::BuildPyramid() {
 }
 
 SurfaceSample SampleBilinear(const GeometryImage& img, int level, float u, float v) {
-    const int n = 1 << level;
-    float x = std::clamp(u * float(n) - 0.5f, 0.f, float(n - 1));
-    float y = std::clamp(v * float(n) - 0.5f, 0.f, float(n - 1));
-    int i0 = std::min(int(x), n - 1), j0 = std::min(int(y), n - 1);
-    int i1 = std::min(i0 + 1, n - 1), j1 = std::min(j0 + 1, n - 1);
-    float fx = x - float(i0), fy = y - float(j0);
+    // Texel centres are the samples; outside the outermost centres the image is
+    // extrapolated linearly (clamping would move border points by half a texel).
+    level = std::min(std::max(level, 1), img.finest_level());
+    const int nn = 1 << level;
+    const float x = u * float(nn) - 0.5f, y = v * float(nn) - 0.5f;
+    const int i0 = nn > 1 ? std::clamp(int(std::floor(x)), 0, nn - 2) : 0;
+    const int j0 = nn > 1 ? std::clamp(int(std::floor(y)), 0, nn - 2) : 0;
+    const int i1 = std::min(i0 + 1, nn - 1), j1 = std::min(j0 + 1, nn - 1);
+    const float fx = nn > 1 ? x - float(i0) : 0.f, fy = nn > 1 ? y - float(j0) : 0.f;
     const GeometryTexel* t[4] = {&img.At(level, uint32_t(i0), uint32_t(j0)),
                                  &img.At(level, uint32_t(i1), uint32_t(j0)),
                                  &img.At(level, uint32_t(i0), uint32_t(j1)),
                                  &img.At(level, uint32_t(i1), uint32_t(j1))};
-    float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     SurfaceSample s{};
     Vec3f nrm{};
     float col_w = 0;
     int best = 0;
+    // The nearest texel decides discrete attributes and the visibility point.
+    const float dx = std::clamp(x, 0.f, float(nn - 1)) - float(i0);
+    const float dy = std::clamp(y, 0.f, float(nn - 1)) - float(j0);
+    best = (dx >= 0.5f ? 1 : 0) + (dy >= 0.5f ? 2 : 0);
     for (int k = 0; k < 4; ++k) {
         s.position += t[k]->position * w[k];
         nrm += t[k]->normal * w[k];
@@ -91,11 +98,13 @@ SurfaceSample SampleBilinear(const GeometryImage& img, int level, float u, float
             s.color += t[k]->color * w[k];
             col_w += w[k];
         }
-        if (w[k] > w[best]) best = k;
     }
-    s.normal = Normalize(nrm);
-    if (Length(nrm) == 0) s.normal = t[best]->normal;
-    s.color = col_w > 0 ? s.color / col_w : Vec3f(-1, -1, -1);
+    s.coverage = std::clamp(s.coverage, 0.f, 1.f);
+    s.normal = Length(nrm) > 0 ? Normalize(nrm) : t[best]->normal;
+    s.color = col_w > 0 ? Vec3f(std::clamp(s.color.x / col_w, 0.f, 1.f),
+                                std::clamp(s.color.y / col_w, 0.f, 1.f),
+                                std::clamp(s.color.z / col_w, 0.f, 1.f))
+                        : Vec3f(-1, -1, -1);
     s.material = t[best]->material;
     // Visibility is taken at the sample itself where the surface is real, else at the
     // nearest texel's real point (the seed's x' rule).

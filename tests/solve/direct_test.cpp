@@ -1,0 +1,76 @@
+// Direct light at points against closed forms: unoccluded lights, an occluder's penumbra
+// (exact here: the light minus the occluder's central projection), the sky.
+#include "solve/direct.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "solve/polygon_light.h"
+#include "solve/visibility.h"
+
+namespace mebake::solve {
+namespace {
+
+struct OccluderScene {
+    Scene scene;
+    VisibilityScene vis;
+    PolygonLight light;
+    OccluderScene(int samples) {
+        light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
+        light.radiance = {1, 1, 1};
+        scene.lights.push_back(light);
+        scene.solver.light_samples = samples;
+        std::vector<float> occ = {-0.4f, 1, -0.4f, 0.4f, 1, -0.4f, 0.4f, 1, 0.4f, -0.4f, 1, 0.4f};
+        std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+        vis.AddTriangles(occ, tris, "occluder");
+        vis.Commit();
+    }
+    double Exact(double x, double z) const {
+        const Vec3d p(x, 0, z);
+        double x0 = std::max(-0.5, x + 2 * (-0.4 - x)), x1 = std::min(0.5, x + 2 * (0.4 - x));
+        double z0 = std::max(-0.5, z + 2 * (-0.4 - z)), z1 = std::min(0.5, z + 2 * (0.4 - z));
+        double full = IrradianceClipped(light.vertices, 1.0, p, Vec3d(0, 1, 0));
+        if (x0 >= x1 || z0 >= z1) return full;
+        std::vector<Vec3d> hidden = {{x0, 2, z0}, {x1, 2, z0}, {x1, 2, z1}, {x0, 2, z1}};
+        return full - IrradianceClipped(hidden, 1.0, p, Vec3d(0, 1, 0));
+    }
+};
+
+TEST(DirectLight, PenumbraCloseToExact) {
+    OccluderScene s(256);
+    DirectLight direct(s.scene, s.vis, 1e-4f, 10);
+    std::vector<ReceiverPoint> pts;
+    for (double x = 0; x <= 2; x += 0.05) pts.push_back({Vec3f(float(x), 0, 0.1f), {0, 1, 0}, Vec3f(float(x), 0, 0.1f)});
+    std::vector<float> e(pts.size() * 9);
+    direct.Evaluate(pts, e);
+    // Directly under the light, were the occluder not there.
+    const double lit = IrradianceClipped(s.light.vertices, 1.0, Vec3d(0, 0, 0), Vec3d(0, 1, 0));
+    for (size_t p = 0; p < pts.size(); ++p) {
+        double got = e[p * 9 + 1];  // colour 0, y component = irradiance on the floor
+        EXPECT_NEAR(got, s.Exact(pts[p].position.x, 0.1), 0.01 * lit) << "x = " << pts[p].position.x;
+    }
+}
+
+TEST(DirectLight, UniformSkyOnOpenPlane) {
+    Scene scene;
+    scene.sky.type = Sky::Type::Uniform;
+    scene.sky.radiance = {1, 2, 3};
+    scene.sky.up = {0, 1, 0};
+    VisibilityScene vis;
+    std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
+    std::vector<uint32_t> tri = {0, 1, 2};
+    vis.AddTriangles(far, tri, "far");
+    vis.Commit();
+    DirectLight direct(scene, vis, 1e-4f, 10);
+    std::vector<ReceiverPoint> pts = {{{0, 0, 0}, {0, 1, 0}, {0, 0, 0}}};
+    std::vector<float> e(9);
+    direct.Evaluate(pts, e);
+    // Unoccluded uniform sky over the upper hemisphere: E = pi L up.
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(e[size_t(3 * c + 1)], std::numbers::pi * (c + 1), 1e-3 * (c + 1));
+    EXPECT_NEAR(e[0], 0, 0.05);
+}
+
+}  // namespace
+}  // namespace mebake::solve
