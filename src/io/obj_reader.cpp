@@ -35,9 +35,10 @@ namespace mebake::io {
 
 namespace {
 
-constexpr size_t kMaxCorners = size_t(1) << 16;  // per polygon
-constexpr size_t kMaxNames = size_t(1) << 20;    // distinct materials / groups
-constexpr size_t kMaxSkippedKinds = 64;          // distinct unknown keywords listed
+constexpr size_t kMaxCorners = size_t(1) << 16;     // per polygon
+constexpr size_t kMaxNames = size_t(1) << 20;       // distinct materials / groups
+constexpr size_t kMaxNameBytes = size_t(64) << 20;  // their total length, per kind
+constexpr size_t kMaxSkippedKinds = 64;             // distinct unknown keywords listed
 constexpr size_t kMaxLeadingComments = 1024;
 constexpr size_t kMaxCommentBytes = size_t(64) << 10;
 
@@ -50,8 +51,9 @@ public:
         auto it = index_.find(std::string(name));
         if (it != index_.end())
             return it->second;
-        if (names_.size() >= kMaxNames)
+        if (names_.size() >= kMaxNames || bytes_ + name.size() > kMaxNameBytes)
             return -1;
+        bytes_ += name.size();
         uint32_t id = uint32_t(names_.size());
         names_.emplace_back(name);
         index_.emplace(names_.back(), id);
@@ -60,6 +62,7 @@ public:
 
 private:
     std::vector<std::string>& names_;
+    size_t bytes_ = 0;
     std::unordered_map<std::string, uint32_t> index_;
 };
 
@@ -163,14 +166,17 @@ private:
         std::string_view kw = NextToken(rest);
         if (kw.empty())
             return;  // "  # comment" after whitespace
-        if (kw == "v")
+        // The hot statements without string compares.
+        if (kw.size() == 1 && kw[0] == 'v')
             return Vertex(rest);
-        if (kw == "f" || kw == "fo")
+        if (kw.size() == 1 && kw[0] == 'f')
             return Face(rest);
-        if (kw == "vt")
+        if (kw.size() == 2 && kw[0] == 'v' && kw[1] == 't')
             return CheckNumbers(rest, 1, 3, "vt", summary_.corner_uv_count);
-        if (kw == "vn")
+        if (kw.size() == 2 && kw[0] == 'v' && kw[1] == 'n')
             return CheckNumbers(rest, 3, 3, "vn", summary_.corner_normal_count);
+        if (kw == "fo")
+            return Face(rest);
         if (kw == "usemtl")
             return UseMaterial(TrimText(rest));
         if (kw == "g") {
@@ -186,7 +192,7 @@ private:
         if (kw == "mtllib") {
             for (auto name = NextToken(rest); !name.empty(); name = NextToken(rest)) {
                 if (mtllibs_.Intern(name) < 0)
-                    Fail("more than {} mtllib names", kMaxNames);
+                    Fail("more than {} mtllib names or {} bytes of them", kMaxNames, kMaxNameBytes);
             }
             return;
         }
@@ -334,14 +340,15 @@ private:
     void UseMaterial(std::string_view name) {
         current_material_ = materials_.Intern(name);
         if (current_material_ < 0)
-            Fail("more than {} materials", kMaxNames);
+            Fail("more than {} materials or {} bytes of their names", kMaxNames, kMaxNameBytes);
     }
 
     void Group(std::string_view name) {
         if (groups_.Intern(name) < 0 && !groups_full_warned_) {
             groups_full_warned_ = true;
-            spdlog::warn("{}: more than {} OBJ group names; listing only the first",
-                         lines_.Loc().ToString(), kMaxNames);
+            spdlog::warn(
+                "{}: more than {} OBJ group names or {} bytes of them; listing only the first",
+                lines_.Loc().ToString(), kMaxNames, kMaxNameBytes);
         }
     }
 

@@ -27,6 +27,7 @@ namespace {
 
 constexpr size_t kMaxCorners = size_t(1) << 16;
 constexpr size_t kMaxLeadingComments = 1024;
+constexpr size_t kMaxCommentBytes = size_t(64) << 10;
 
 bool IsIntegerToken(std::string_view tok) {
     return tok.find_first_of(".eEnN") == std::string_view::npos;
@@ -71,8 +72,12 @@ private:
         while (lines_.Next(line)) {
             std::string_view t = TrimText(line);
             if (!t.empty() && t.front() == '#') {
-                if (collect_comments && header_.comments.size() < kMaxLeadingComments)
-                    header_.comments.emplace_back(TrimText(t.substr(1)));
+                std::string_view text = TrimText(t.substr(1));
+                if (collect_comments && header_.comments.size() < kMaxLeadingComments &&
+                    comment_bytes_ + text.size() <= kMaxCommentBytes) {
+                    comment_bytes_ += text.size();
+                    header_.comments.emplace_back(text);
+                }
                 continue;
             }
             t = TrimText(StripComment(t));
@@ -299,6 +304,7 @@ private:
     FaceBatch faces_;
     uint64_t vertex_total_ = 0, face_total_ = 0;
     uint64_t vertices_read_ = 0, vertices_sent_ = 0, faces_sent_ = 0;
+    size_t comment_bytes_ = 0;
     bool normals_ = false, colors_ = false, uvs_ = false;
     bool begun_ = false;
 };

@@ -53,6 +53,9 @@ bool TextLineReader::Next(std::string_view& line) {
     ++line_;
     if (!line.empty() && line.back() == '\r')
         line.remove_suffix(1);
+    // A UTF-8 byte order mark (Windows exporters) is not part of the first statement.
+    if (line_ == 1 && line.substr(0, 3) == "\xEF\xBB\xBF")
+        line.remove_prefix(3);
     if (line.size() > kMax) {
         InputError(Loc(), "line longer than {} bytes; expected text (is this binary data?)", kMax);
     }

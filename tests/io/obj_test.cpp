@@ -125,6 +125,12 @@ TEST(ObjReader, VerticesAndAllFaceForms) {
     EXPECT_EQ(c.material, std::vector<uint32_t>(6, 0));
 }
 
+TEST(ObjReader, ByteOrderMarkAndTabs) {
+    Collected c = Obj("\xEF\xBB\xBFv\t0 0 0\nv 1\t0 0\nv 0 1 0\nf\t1 2 3\n");
+    EXPECT_EQ(c.position.size(), 3u);
+    EXPECT_EQ(c.faces(), 1u);
+}
+
 TEST(ObjReader, RelativeIndicesCountFromWhereTheFaceIs) {
     Collected c = Obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 5 5 5\nf -4 -3 -1\n");
     EXPECT_EQ(c.index, (std::vector<uint64_t>{0, 1, 2, 0, 1, 3}));
@@ -484,6 +490,32 @@ TEST(ObjWriter, FacesBeforeTheirVerticesAreSpilledToTheEnd) {
     c.index = {0, 1, 2, 2, 1, 3};
     std::string text = WriteObj(c, MeshHeader{}, {}, /*faces_first=*/true);
     EXPECT_EQ(text, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 3 2 4\n");
+}
+
+TEST(ObjWriter, CommitsAFileOnlyAtTheEnd) {
+    auto path = std::filesystem::temp_directory_path() /
+                fmt::format("mebake-obj-writer-{}.obj", ::getpid());
+    std::filesystem::remove(path);
+    {
+        auto out = OutputStream::Open(path.string());
+        auto w = MakeObjWriter(*out, {});
+        MeshHeader h;
+        w->Begin(h);
+        VertexBatch vb;
+        vb.position = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        w->Vertices(vb);
+        FaceBatch fb;
+        fb.size = {3};
+        fb.index = {0, 1, 2};
+        w->Faces(fb);
+        EXPECT_FALSE(std::filesystem::exists(path));
+        w->End(MeshSummary{});
+    }
+    ASSERT_TRUE(std::filesystem::exists(path));
+    Collected c = ReadPath(ReadObj, path.string());
+    std::filesystem::remove(path);
+    EXPECT_EQ(c.position.size(), 3u);
+    EXPECT_EQ(c.index, (std::vector<uint64_t>{0, 1, 2}));
 }
 
 TEST(ObjWriter, RealMeshesRoundTripExactly) {
