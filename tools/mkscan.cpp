@@ -405,6 +405,13 @@ public:
           color_(Hash(seed, 0xc010)) {
         cell_ = size / double(std::max(w, h));
         size_ = size;
+        // Octaves finer than a few cells would only alias into jagged noise: stop where
+        // a noise period (starting at a third of the tile, 2.03x finer each octave)
+        // would span fewer than 3 cells.
+        octaves_ = 2;
+        double period_cells = double(std::max(w, h)) / 3.0;
+        while (octaves_ < 7 && period_cells / std::pow(2.03, octaves_) >= 3.0)
+            ++octaves_;
     }
     uint64_t VertexCount() const { return uint64_t((w_ + 1) * (h_ + 1)); }
     uint64_t QuadCount() const { return uint64_t(w_ * h_); }
@@ -443,7 +450,7 @@ private:
         if (noise_ <= 0)
             return 0;
         double f = 3.0 / size_;
-        double base = shape_.Fbm2(x * f, y * f, 7);
+        double base = shape_.Fbm2(x * f, y * f, octaves_);
         return noise_ * size_ * base;
     }
     double Jitter(uint64_t v) const {
@@ -451,6 +458,7 @@ private:
     }
 
     int64_t w_, h_;
+    int octaves_;
     Vec3d origin_;
     double noise_;
     uint64_t seed_;
