@@ -654,7 +654,12 @@ template <typename Surface>
 void PlanDefects(Component<Surface>& comp, uint64_t holes, uint64_t fins) {
     const Surface& s = comp.surface;
     uint64_t quads = s.QuadCount();
+    // Hole radius: 1% of the grid width, at least 1.5 cells (a 3-cell-wide disk).
     double radius = std::max(1.5, double(s.Width()) / 100.0);
+    uint64_t disk = uint64_t(std::ceil(3.2 * radius * radius));  // a little over pi r^2
+    if (holes > 0 && holes > quads / disk)
+        mebake::UsageError("{} holes of ~{} quads each would cover all {} quads of a component",
+                           holes, disk, quads);
     for (uint64_t k = 0; k < holes; ++k)
         s.Cells(Hash(comp.seed, 0x401e, k) % quads, radius, comp.hole_quads);
     std::sort(comp.hole_quads.begin(), comp.hole_quads.end());
