@@ -4,24 +4,24 @@
 // charting only; everything between the passes is this plain struct.
 #pragma once
 
-#include "core/vec.h"
-
 #include <array>
 #include <cstdint>
 #include <vector>
+
+#include "core/vec.h"
 
 namespace mebake::stream {
 
 constexpr uint64_t kNoId = ~uint64_t(0);
 
 struct TriMesh {
-    std::vector<Vec3f> position;      // per vertex
-    std::vector<Vec3f> albedo;        // per vertex, linear RGB; empty = none
-    std::vector<uint64_t> vertex_id;  // per vertex: global input vertex index
+    std::vector<Vec3f> position;                  // per vertex
+    std::vector<Vec3f> albedo;                    // per vertex, linear RGB; empty = none
+    std::vector<uint64_t> vertex_id;              // per vertex: global input vertex index
     std::vector<std::array<uint32_t, 3>> triangles;
-    std::vector<uint64_t> face_id;   // per triangle: global input triangle
-                                     // index, kNoId if added (hole filling)
-    std::vector<uint32_t> material;  // per triangle: scene material index
+    std::vector<uint64_t> face_id;                // per triangle: global input triangle
+                                                  // index, kNoId if added (hole filling)
+    std::vector<uint32_t> material;               // per triangle: scene material index
 
     size_t vertex_count() const { return position.size(); }
     size_t triangle_count() const { return triangles.size(); }
