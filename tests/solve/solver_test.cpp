@@ -322,8 +322,9 @@ TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
     for (double x = 0.4; x <= 1.3; x += 0.1) {
         double h = at(x, 0), e = exact(x, 0);
         worst = std::max(worst, std::abs(h - e) / lit);
-        if (e > prev_exact + 0.01 * lit)
+        if (e > prev_exact + 0.01 * lit) {
             EXPECT_GT(h, prev) << "penumbra not monotone at x = " << x;
+        }
         prev = h;
         prev_exact = e;
     }
