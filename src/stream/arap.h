@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/vec.h"
-#include "stream/lscm.h"
+#include "stream/cotan_laplacian.h"
 
 namespace mebake::stream {
 
@@ -22,7 +22,9 @@ struct ArapOptions {
     bool guard_flips = true;
     // 0: ARAP (targets are rotations). In (0, 1]: targets move towards the nearest
     // area-preserving matrix, trading shear for a flatter area ratio.
-    double authalic_weight = 0;
+    double authalic_weight = 1;
+    // Caps the authalic target's sigma1 / sigma2, so noise is not chased with shear.
+    double max_target_anisotropy = 1.5;
 };
 
 struct ArapReport {
@@ -30,16 +32,18 @@ struct ArapReport {
     double initial_energy = 0;   // sum_T A_T |J_T - R_T|^2 / sum_T A_T, at the start
     double final_energy = 0;     // same, for the returned map
     bool stopped_by_flip = false;
-    bool solver_failed = false;  // factorization failed: uv is left as it came in
+    bool solver_failed = false;  // a solve was not finite: uv is the last good iterate
 };
 
 // Counts triangles whose uv orientation is not strictly counter-clockwise.
 uint32_t CountFlips(std::span<const Vec2d> uv, std::span<const std::array<uint32_t, 3>> triangles);
 
-// Refines *uv in place (scale included: the result is close to 3D lengths). Vertex
-// `anchor` keeps its position (fixes the translation).
+// Refines *uv in place (scale included: the result is close to 3D lengths). The global
+// step solves with `laplacian`, factorized with exactly `anchor` fixed; the anchor keeps
+// its position.
 ArapReport RefineArap(std::span<const FlatTriangle> flat,
-                      std::span<const std::array<uint32_t, 3>> triangles, uint32_t anchor,
+                      std::span<const std::array<uint32_t, 3>> triangles,
+                      const CotanLaplacian& laplacian, uint32_t anchor,
                       const ArapOptions& options, std::vector<Vec2d>* uv);
 
 }  // namespace mebake::stream

@@ -8,8 +8,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "core/check.h"
+#include "stream/bff.h"
+#include "stream/cotan_laplacian.h"
 #include "stream/lscm.h"
 
 namespace mebake::stream {
@@ -252,6 +255,20 @@ void MeasureDistortion(std::span<const Vec3f> position,
         m.conformal_max = std::max(m.conformal_max, ratio);
     }
     m.jacobian_deviation_mean = sum_3d > 0 ? misplaced / sum_3d : 0;
+    constexpr int kCells = 8;
+    std::array<double, kCells * kCells> cell_3d{}, cell_uv{};
+    for (size_t t = 0; t < tri_count; ++t) {
+        const auto& f = triangles[t];
+        const double cx = (double(uv[f[0]].x) + uv[f[1]].x + uv[f[2]].x) / 3;
+        const double cy = (double(uv[f[0]].y) + uv[f[1]].y + uv[f[2]].y) / 3;
+        const int ix = std::clamp(int(cx * kCells), 0, kCells - 1);
+        const int iy = std::clamp(int(cy * kCells), 0, kCells - 1);
+        cell_3d[iy * kCells + ix] += area_3d[t];
+        cell_uv[iy * kCells + ix] += s2 * area_uv[t];
+    }
+    double coarse = 0;
+    for (int c = 0; c < kCells * kCells; ++c) coarse += std::abs(cell_3d[c] - cell_uv[c]);
+    m.jacobian_deviation_coarse = sum_3d > 0 ? coarse / sum_3d : 0;
     m.conformal_mean = conformal_weight > 0 ? conformal_sum / conformal_weight : 1;
     std::sort(weighted_dev.begin(), weighted_dev.end());
     m.jacobian_deviation_p95 = 0;
@@ -262,6 +279,98 @@ void MeasureDistortion(std::span<const Vec3f> position,
         if (acc >= 0.95 * sum_3d) break;
     }
 }
+
+namespace {
+
+// A far-apart pair of boundary vertices (double sweep in 3D, ties to the first).
+std::pair<uint32_t, uint32_t> FarPair(const TriMesh& chart, std::span<const uint32_t> boundary) {
+    auto farthest = [&](uint32_t from) {
+        const Vec3d p(chart.position[from]);
+        uint32_t best = boundary[0];
+        double best_d = -1;
+        for (uint32_t v : boundary) {
+            const Vec3d e = Vec3d(chart.position[v]) - p;
+            if (Dot(e, e) > best_d) {
+                best_d = Dot(e, e);
+                best = v;
+            }
+        }
+        return best;
+    };
+    const uint32_t a = farthest(boundary[0]);
+    return {a, farthest(a)};
+}
+
+// Initial flattening (BFF or LSCM, with LSCM as BFF's fallback) and refinement. On
+// failure sets out->status and out->message.
+bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
+             std::span<const uint32_t> boundary, const ParamOptions& options,
+             std::vector<Vec2d>* uv, ChartParam* out) {
+    const uint32_t vertex_count = uint32_t(chart.vertex_count());
+    const auto [pin0, pin1] = FarPair(chart, boundary);
+    if (pin0 == pin1) {
+        out->status = ParamStatus::kDegenerate;
+        out->message = "all boundary vertices coincide";
+        return false;
+    }
+    auto lscm = [&] {
+        const double distance = Length(Vec3d(chart.position[pin1]) - Vec3d(chart.position[pin0]));
+        return SolveLscm(flat, chart.triangles, vertex_count, pin0, pin1, distance, uv);
+    };
+    bool ok = false;
+    if (options.init == ParamInit::kBff) {
+        ok = FlattenBff(chart.position, flat, chart.triangles, boundary, uv);
+        out->metrics.init = ok ? ParamInit::kBff : ParamInit::kLscm;
+    }
+    if (!ok) {
+        out->metrics.init = ParamInit::kLscm;
+        ok = lscm();
+    }
+    if (!ok) {
+        out->status = ParamStatus::kSolverFailed;
+        out->message = "the initial flattening failed";
+        return false;
+    }
+    out->metrics.init_flipped = CountFlips(*uv, chart.triangles);
+    if (!options.refine) return true;
+
+    std::vector<char> fixed(vertex_count, 0);
+    fixed[pin0] = 1;
+    CotanLaplacian laplacian;
+    if (!laplacian.Factorize(flat, chart.triangles, fixed)) {
+        out->status = ParamStatus::kSolverFailed;
+        out->message = "Laplacian factorization failed";
+        return false;
+    }
+    ArapReport report = RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
+    uint32_t flips = CountFlips(*uv, chart.triangles);
+    if (flips > 0 && out->metrics.init == ParamInit::kBff) {
+        // BFF's harmonic interior can fold on bad triangles; LSCM rarely does.
+        std::vector<Vec2d> bff_uv;
+        bff_uv.swap(*uv);
+        if (lscm()) {
+            const uint32_t lscm_flips = CountFlips(*uv, chart.triangles);
+            const ArapReport second = RefineArap(flat, chart.triangles, laplacian, pin0,
+                                                 options.refine_options, uv);
+            const uint32_t second_flips = CountFlips(*uv, chart.triangles);
+            if (second_flips < flips) {
+                out->metrics.init = ParamInit::kLscm;
+                out->metrics.init_flipped = lscm_flips;
+                report = second;
+                flips = second_flips;
+            } else {
+                uv->swap(bff_uv);
+            }
+        } else {
+            uv->swap(bff_uv);
+        }
+    }
+    out->metrics.refine_iterations = report.iterations;
+    out->metrics.refine_stopped_by_flip = report.stopped_by_flip;
+    return true;
+}
+
+}  // namespace
 
 ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) {
     ChartParam out;
@@ -295,42 +404,8 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
         return out;
     }
 
-    // Pins: a far-apart pair of boundary vertices (double sweep, ties to the first).
-    auto farthest = [&](uint32_t from) {
-        const Vec3d p(chart.position[from]);
-        uint32_t best = disc.boundary[0];
-        double best_d = -1;
-        for (uint32_t v : disc.boundary) {
-            const Vec3d e = Vec3d(chart.position[v]) - p;
-            if (Dot(e, e) > best_d) {
-                best_d = Dot(e, e);
-                best = v;
-            }
-        }
-        return best;
-    };
-    const uint32_t pin0 = farthest(disc.boundary[0]);
-    const uint32_t pin1 = farthest(pin0);
-    if (pin0 == pin1) {
-        out.status = ParamStatus::kDegenerate;
-        out.message = "all boundary vertices coincide";
-        return out;
-    }
-    const double pin_distance =
-        Length(Vec3d(chart.position[pin1]) - Vec3d(chart.position[pin0]));
-
     std::vector<Vec2d> uv;
-    if (!SolveLscm(flat, chart.triangles, vertex_count, pin0, pin1, pin_distance, &uv)) {
-        out.status = ParamStatus::kSolverFailed;
-        out.message = "LSCM factorization failed";
-        return out;
-    }
-    out.metrics.lscm_flipped = CountFlips(uv, chart.triangles);
-    if (options.arap) {
-        const ArapReport report = RefineArap(flat, chart.triangles, pin0, options.arap_options, &uv);
-        out.metrics.arap_iterations = report.iterations;
-        out.metrics.arap_stopped_by_flip = report.stopped_by_flip;
-    }
+    if (!Flatten(chart, flat, disc.boundary, options, &uv, &out)) return out;
 
     const SquareFit fit = FitUnitSquare(uv, options.margin, options.objective);
     out.uv.resize(vertex_count);
@@ -346,10 +421,10 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
     if (out.metrics.flipped > 0) {
         out.status = ParamStatus::kFlipped;
         out.message = fmt::format("{} flipped uv triangles", out.metrics.flipped);
-    } else if (out.metrics.jacobian_deviation_mean > options.max_jacobian_deviation) {
+    } else if (out.metrics.jacobian_deviation_coarse > options.max_jacobian_deviation) {
         out.status = ParamStatus::kDistorted;
-        out.message = fmt::format("Jacobian deviation {:.4f} > {:.4f}",
-                                  out.metrics.jacobian_deviation_mean,
+        out.message = fmt::format("coarse Jacobian deviation {:.4f} > {:.4f}",
+                                  out.metrics.jacobian_deviation_coarse,
                                   options.max_jacobian_deviation);
     } else {
         out.status = ParamStatus::kOk;

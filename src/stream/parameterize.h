@@ -1,7 +1,8 @@
 // Turns one chart (a topological disc) into a Meshed Master Element parameterization:
 // a near-isometric map with natural boundaries, placed in the unit square by a similarity.
-// Method: LSCM (Lévy et al. 2002, lscm.h), refined by ARAP local/global iterations
-// (Liu et al. 2008, arap.h), then rotating calipers + uniform scale (square_fit.h).
+// Method: a natural-boundary conformal map (BFF, bff.h, or LSCM, lscm.h), refined by
+// local/global iterations (Liu et al. 2008, arap.h) towards area preservation, then
+// rotating calipers + uniform scale into the square (square_fit.h).
 // Master element background: the seed paper, section 3.1 step 3.
 //
 // Definitions used by the metrics (A_T = 3D area, a_T = uv area of triangle T, s = scale):
@@ -13,6 +14,11 @@
 //                surface's area the constant-Jacobian master element misplaces (the
 //                uv-area-weighted mean of |r_T - 1|).
 //   jacobian_deviation_p95  = 95th percentile of |r_T - 1| weighted by A_T.
+//   jacobian_deviation_coarse = the same L1 measure after summing A_T and a_T per cell of
+//                an 8 x 8 grid over the square (triangles binned by uv centroid): the
+//                area misplaced at the scale of the lighting's quadtree nodes. Triangle-scale
+//                noise of a scan inflates the per-triangle numbers but cancels here, and
+//                splitting a chart cannot remove it, so the split test uses this one.
 //   conformal ratio = sigma1 / sigma2 >= 1 of the triangle's Jacobian (1 = no shear).
 #pragma once
 
@@ -42,7 +48,7 @@ enum class ParamStatus {
     kSolverFailed,  // the sparse factorization failed
     // A parameterization was computed (uv, metrics filled) but the chart should be split.
     kFlipped,       // some uv triangles are flipped or degenerate
-    kDistorted,     // jacobian_deviation_mean above ParamOptions::max_jacobian_deviation
+    kDistorted,     // jacobian_deviation_coarse above ParamOptions::max_jacobian_deviation
 };
 
 const char* ParamStatusName(ParamStatus status);
@@ -51,26 +57,33 @@ inline bool HasUv(ParamStatus s) {
     return s == ParamStatus::kOk || s == ParamStatus::kFlipped || s == ParamStatus::kDistorted;
 }
 
+enum class ParamInit {
+    kBff,   // Boundary First Flattening (bff.h): one interior-Laplacian factorization
+    kLscm,  // LSCM (lscm.h): a coupled system twice the size, ~5-10x slower to factorize
+};
+
 struct ParamOptions {
-    bool arap = true;            // refine LSCM with ARAP (off: plain LSCM)
-    ArapOptions arap_options;
-    double margin = 1.0 / 64;    // free band around the chart in the square
+    ParamInit init = ParamInit::kBff;  // falls back to LSCM if BFF fails or folds
+    bool refine = true;                // local/global refinement (arap.h)
+    ArapOptions refine_options;
+    double margin = 1.0 / 64;          // free band around the chart in the square
     SquareFitObjective objective = SquareFitObjective::kMinLongerSide;
-    // Split threshold on jacobian_deviation_mean (see the header comment). The seed paper
-    // used 1%. Measured on real scan charts this is reached by ARAP at a chart's normal
-    // variation of ~TODO degrees.
+    // Split threshold on jacobian_deviation_coarse (see the header comment); the seed paper
+    // used 1% on its Jacobian deviation.
     double max_jacobian_deviation = 0.01;
 };
 
 struct ParamMetrics {
+    ParamInit init = ParamInit::kBff;  // the initial flattening actually used
+    uint32_t init_flipped = 0;         // flipped triangles of the initial flattening
+    int refine_iterations = 0;
+    bool refine_stopped_by_flip = false;
     uint32_t flipped = 0;         // uv triangles not strictly counter-clockwise (final float uv)
-    uint32_t lscm_flipped = 0;    // the same for the LSCM stage
-    int arap_iterations = 0;
-    bool arap_stopped_by_flip = false;
     double area_3d = 0;
     double jacobian_deviation_mean = 0;
     double jacobian_deviation_p95 = 0;
     double jacobian_deviation_max = 0;  // over triangles with 3D area > 0
+    double jacobian_deviation_coarse = 0;
     double conformal_mean = 1;          // 3D-area-weighted mean of sigma1 / sigma2
     double conformal_max = 1;
     double virtual_fraction = 1;        // 1 - uv area of the chart
