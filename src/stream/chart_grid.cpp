@@ -24,8 +24,9 @@ namespace mebake::stream {
 
 namespace {
 
-// Barycentric coordinates below -kInside count as outside.
-constexpr double kInside = 1e-9;
+// Points this close (in uv) to a triangle count as inside it: a few float ulps at 1.0,
+// the resolution of the uv the grid is given.
+constexpr double kInsideDistance = 0x1p-22;
 
 struct Tri2 {
     Vec2d p[3];
@@ -274,12 +275,26 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
     for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
         double b[3];
         if (!Barycentric(TriangleAt(g, g.cell_tris[i]), u, b)) continue;
-        if (b[0] < -kInside || b[1] < -kInside || b[2] < -kInside) continue;
+        if (b[0] < 0 || b[1] < 0 || b[2] < 0) continue;
         r.triangle = g.cell_tris[i];
-        double sum = 0;
-        for (int k = 0; k < 3; ++k) sum += (r.b[k] = std::max(b[k], 0.0));
-        for (double& x : r.b) x /= sum;
+        std::copy(b, b + 3, r.b);
         r.real = true;
+        r.nearest = u;
+        return r;
+    }
+    // Within float resolution of a triangle (e.g. a rounded point of a boundary edge):
+    // real, at the closest point.
+    double best2 = kInsideDistance * kInsideDistance;
+    for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
+        const Closest c = ClosestPoint(TriangleAt(g, g.cell_tris[i]), u);
+        if (c.dist2 <= best2 && (!r.real || c.dist2 < best2)) {
+            best2 = c.dist2;
+            r.triangle = g.cell_tris[i];
+            std::copy(c.b, c.b + 3, r.b);
+            r.real = true;
+        }
+    }
+    if (r.real) {
         r.nearest = u;
         return r;
     }
@@ -326,9 +341,9 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     std::vector<Tri2> tris(tri_count);
     for (size_t t = 0; t < tri_count; ++t) tris[t] = TriangleAt(g, uint32_t(t));
     const double h = 1.0 / resolution;
-    // Cells are closed boxes, widened a little so a point on a cell border finds the
-    // triangles of both neighbours.
-    const double pad = 1e-9;
+    // Cells are closed boxes, widened by Locate's tolerance so that a point finds every
+    // triangle within the tolerance in its own cell's list.
+    const double pad = kInsideDistance;
     auto cell_box = [&](size_t c) {
         const double x = double(c % resolution) * h, y = double(c / resolution) * h;
         return Box{{x - pad, y - pad}, {x + h + pad, y + h + pad}};

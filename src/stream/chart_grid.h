@@ -43,9 +43,9 @@ struct ChartGrid {
     // Triangles on the uv outline: with a boundary edge, or flipped / zero uv area.
     std::vector<uint32_t> outline_tris;
 
-    // Exact point location. u is clamped to [0,1]^2 first. A point within 1e-9 (in
-    // barycentric terms) of a triangle counts as inside it. Among overlapping triangles
-    // (a non-injective map) and among equally near ones, the lowest index wins.
+    // Exact point location. u is clamped to [0,1]^2 first. A point within 2^-22 (a few
+    // float ulps) of a triangle counts as inside it. Among overlapping triangles (a
+    // non-injective map) and among equally near ones, the lowest index wins.
     GridLocation Locate(Vec2f u) const;
 
     size_t MemoryBytes() const;
