@@ -1,17 +1,17 @@
-// ARAP parameterization by local/global iterations, Liu et al. 2008 (see arap.h).
+// Local/global refinement, Liu et al. 2008 (see arap.h).
 //
-// Energy: sum_T A_T |J_T - R_T|_F^2, J_T the 2x2 Jacobian of the uv map in the triangle's
-// own isometric frame, R_T a rotation. Local step: R_T = closest rotation to J_T, in closed
-// form for 2x2. Global step: a cotangent-Laplacian solve
-// whose matrix never changes, so it is factorized once and each iteration costs two
-// back-substitutions.
+// Energy: sum_T A_T |J_T - L_T|_F^2, J_T the 2x2 Jacobian of the uv map in the triangle's
+// own isometric frame, L_T its target (see Target below). Local step: the closest target
+// per triangle, in closed form. Global step: a cotangent-Laplacian solve whose matrix never
+// changes, so it is factorized once and each iteration costs two back-substitutions.
+// Both steps lower the energy, so the energy decrease is the stopping test.
 #include "stream/arap.h"
-
-#include <algorithm>
-#include <cmath>
 
 #include "core/check.h"
 #include "core/parallel.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace mebake::stream {
 
@@ -19,7 +19,8 @@ uint32_t CountFlips(std::span<const Vec2d> uv, std::span<const std::array<uint32
     uint32_t flips = 0;
     for (const auto& f : triangles) {
         const double a = Cross(uv[f[1]] - uv[f[0]], uv[f[2]] - uv[f[0]]);
-        if (!(a > 0)) ++flips;
+        if (!(a > 0))
+            ++flips;
     }
     return flips;
 }
@@ -37,7 +38,8 @@ std::array<double, 4> Target(double a, double b, double c, double d, double w,
                              double max_anisotropy) {
     const double e = 0.5 * (a + d), f = 0.5 * (a - d), g = 0.5 * (c + b), h = 0.5 * (c - b);
     const double q = std::sqrt(e * e + h * h), r = std::sqrt(f * f + g * g);
-    if (!(q > 0)) return {1, 0, 0, 1};
+    if (!(q > 0))
+        return {1, 0, 0, 1};
     const double s1 = q + r, s2 = q - r;
     double t1 = 1, t2 = 1;
     if (w > 0 && s2 > 0) {
@@ -47,10 +49,12 @@ std::array<double, 4> Target(double a, double b, double c, double d, double w,
         for (int it = 0; it < 20; ++it) {
             const double fv = ((s - s1) * s * s) * s + s2 * s - 1;
             const double df = (4 * s - 3 * s1) * s * s + s2;
-            if (!(df > 0)) break;
+            if (!(df > 0))
+                break;
             const double step = fv / df;
             s = std::max(s - step, 0.5 * s);
-            if (std::abs(step) < 1e-12 * s) break;
+            if (std::abs(step) < 1e-12 * s)
+                break;
         }
         const double limit = std::sqrt(max_anisotropy);
         s = std::clamp(s, 1 / limit, limit);
@@ -62,12 +66,12 @@ std::array<double, 4> Target(double a, double b, double c, double d, double w,
     return {cw * e + aw * f, -cw * h + aw * g, cw * h + aw * g, cw * e - aw * f};
 }
 
-// Closest targets (rotations for ARAP) to the current Jacobians; returns the normalized
+// The closest targets to the current Jacobians; returns the normalized
 // energy.
 double LocalStep(std::span<const FlatTriangle> flat,
                  std::span<const std::array<uint32_t, 3>> triangles, std::span<const Vec2d> uv,
-                 double authalic_weight, double max_anisotropy, std::vector<std::array<double, 4>>* rotation,
-                 std::vector<double>* energy) {
+                 double authalic_weight, double max_anisotropy,
+                 std::vector<std::array<double, 4>>* target_out, std::vector<double>* energy) {
     ParallelForRange(
         0, int64_t(triangles.size()),
         [&](int64_t lo, int64_t hi) {
@@ -85,7 +89,7 @@ double LocalStep(std::span<const FlatTriangle> flat,
                 }
                 const std::array<double, 4> target =
                     Target(a, b, c, d, authalic_weight, max_anisotropy);
-                (*rotation)[t] = target;
+                (*target_out)[t] = target;
                 const double da = a - target[0], db = b - target[1], dc = c - target[2],
                              dd = d - target[3];
                 (*energy)[t] = ft.area * (da * da + db * db + dc * dc + dd * dd);
@@ -104,8 +108,8 @@ double LocalStep(std::span<const FlatTriangle> flat,
 
 ArapReport RefineArap(std::span<const FlatTriangle> flat,
                       std::span<const std::array<uint32_t, 3>> triangles,
-                      const CotanLaplacian& laplacian, uint32_t anchor,
-                      const ArapOptions& options, std::vector<Vec2d>* uv) {
+                      const CotanLaplacian& laplacian, uint32_t anchor, const ArapOptions& options,
+                      std::vector<Vec2d>* uv) {
     CHECK_EQ(flat.size(), triangles.size());
     CHECK_EQ(laplacian.row().size(), uv->size());
     CHECK_LT(anchor, uv->size());
@@ -123,7 +127,8 @@ ArapReport RefineArap(std::span<const FlatTriangle> flat,
     };
     report.initial_energy = local_step(*uv);
     report.final_energy = report.initial_energy;
-    if (n == 0 || options.max_iterations <= 0) return report;
+    if (n == 0 || options.max_iterations <= 0)
+        return report;
 
     const uint32_t start_flips = CountFlips(*uv, triangles);
     const Vec2d fixed = (*uv)[anchor];
@@ -135,15 +140,18 @@ ArapReport RefineArap(std::span<const FlatTriangle> flat,
         std::fill(rhs.begin(), rhs.end(), 0.0);
         for (size_t t = 0; t < triangles.size(); ++t) {
             const FlatTriangle& ft = flat[t];
-            if (ft.area == 0) continue;
+            if (ft.area == 0)
+                continue;
             const auto& r = target[t];
             for (int i = 0; i < 3; ++i) {
                 const uint32_t ri = row[triangles[t][i]];
-                if (ri == kFixed) continue;
+                if (ri == kFixed)
+                    continue;
                 rhs[ri] += ft.area * (r[0] * ft.grad[i].x + r[1] * ft.grad[i].y);
                 rhs[ri + n] += ft.area * (r[2] * ft.grad[i].x + r[3] * ft.grad[i].y);
                 for (int j = 0; j < 3; ++j) {
-                    if (triangles[t][j] != anchor) continue;
+                    if (triangles[t][j] != anchor)
+                        continue;
                     const double k = CotanWeight(ft, i, j);
                     rhs[ri] -= k * fixed.x;
                     rhs[ri + n] -= k * fixed.y;
@@ -155,7 +163,8 @@ ArapReport RefineArap(std::span<const FlatTriangle> flat,
             break;
         }
         for (size_t v = 0; v < row.size(); ++v)
-            if (row[v] != kFixed) next[v] = Vec2d(rhs[row[v]], rhs[row[v] + n]);
+            if (row[v] != kFixed)
+                next[v] = Vec2d(rhs[row[v]], rhs[row[v] + n]);
         if (options.guard_flips && CountFlips(next, triangles) > start_flips) {
             report.stopped_by_flip = true;
             break;
@@ -165,7 +174,8 @@ ArapReport RefineArap(std::span<const FlatTriangle> flat,
         ++report.iterations;
         const double previous = report.final_energy;
         report.final_energy = energy;
-        if (previous - energy <= options.relative_tolerance * previous) break;
+        if (previous - energy <= options.relative_tolerance * previous)
+            break;
     }
     return report;
 }

@@ -13,10 +13,10 @@
 // conjugate); the refinement that follows makes the difference moot.
 #include "stream/bff.h"
 
+#include "core/check.h"
+
 #include <cmath>
 #include <numbers>
-
-#include "core/check.h"
 
 namespace mebake::stream {
 
@@ -27,9 +27,11 @@ bool FlattenBff(std::span<const Vec3f> position, std::span<const FlatTriangle> f
     constexpr double kPi = std::numbers::pi;
     const size_t vertex_count = position.size();
     const size_t nb = boundary.size();
-    if (nb < 3) return false;
+    if (nb < 3)
+        return false;
     std::vector<char> on_boundary(vertex_count, 0);
-    for (uint32_t b : boundary) on_boundary[b] = 1;
+    for (uint32_t b : boundary)
+        on_boundary[b] = 1;
 
     std::vector<double> angle_sum(vertex_count, 0.0);
     for (const auto& f : triangles) {
@@ -42,7 +44,8 @@ bool FlattenBff(std::span<const Vec3f> position, std::span<const FlatTriangle> f
     }
 
     CotanLaplacian interior;
-    if (!interior.Factorize(flat, triangles, on_boundary)) return false;
+    if (!interior.Factorize(flat, triangles, on_boundary))
+        return false;
     const std::vector<uint32_t>& row = interior.row();
     const size_t n = interior.size();
     constexpr uint32_t kFixed = CotanLaplacian::kFixed;
@@ -52,22 +55,29 @@ bool FlattenBff(std::span<const Vec3f> position, std::span<const FlatTriangle> f
     {
         std::vector<double> rhs(n);
         for (size_t v = 0; v < vertex_count; ++v)
-            if (row[v] != kFixed) rhs[row[v]] = angle_sum[v] - 2 * kPi;
-        if (!interior.Solve(&rhs, 1)) return false;
+            if (row[v] != kFixed)
+                rhs[row[v]] = angle_sum[v] - 2 * kPi;
+        if (!interior.Solve(&rhs, 1))
+            return false;
         for (size_t v = 0; v < vertex_count; ++v)
-            if (row[v] != kFixed) u[v] = rhs[row[v]];
+            if (row[v] != kFixed)
+                u[v] = rhs[row[v]];
     }
     // 2. Target turning angles k~_b = k_b + (A u)_b (u_B = 0, so only interior columns).
     std::vector<double> turning(vertex_count, 0.0);
-    for (uint32_t b : boundary) turning[b] = kPi - angle_sum[b];
+    for (uint32_t b : boundary)
+        turning[b] = kPi - angle_sum[b];
     for (size_t t = 0; t < triangles.size(); ++t) {
-        if (flat[t].area == 0) continue;
+        if (flat[t].area == 0)
+            continue;
         for (int i = 0; i < 3; ++i) {
             const uint32_t vi = triangles[t][i];
-            if (!on_boundary[vi]) continue;
+            if (!on_boundary[vi])
+                continue;
             for (int j = 0; j < 3; ++j) {
                 const uint32_t vj = triangles[t][j];
-                if (!on_boundary[vj]) turning[vi] += CotanWeight(flat[t], i, j) * u[vj];
+                if (!on_boundary[vj])
+                    turning[vi] += CotanWeight(flat[t], i, j) * u[vj];
             }
         }
     }
@@ -78,7 +88,8 @@ bool FlattenBff(std::span<const Vec3f> position, std::span<const FlatTriangle> f
     double m00 = 0, m01 = 0, m11 = 0;
     Vec2d sum(0, 0);
     for (size_t j = 0; j < nb; ++j) {
-        if (j > 0) phi += turning[boundary[j]];
+        if (j > 0)
+            phi += turning[boundary[j]];
         tangent[j] = Vec2d(std::cos(phi), std::sin(phi));
         length[j] = Length(Vec3d(position[boundary[(j + 1) % nb]]) - Vec3d(position[boundary[j]]));
         m00 += length[j] * tangent[j].x * tangent[j].x;
@@ -88,36 +99,44 @@ bool FlattenBff(std::span<const Vec3f> position, std::span<const FlatTriangle> f
     }
     // l*_j = l_j (1 - T_j . lambda), M lambda = sum_j l_j T_j, M = sum_j l_j T_j T_j^T.
     const double det = m00 * m11 - m01 * m01;
-    if (!(std::abs(det) > 1e-300)) return false;
+    if (!(std::abs(det) > 1e-300))
+        return false;
     const Vec2d lambda((m11 * sum.x - m01 * sum.y) / det, (m00 * sum.y - m01 * sum.x) / det);
     uv->assign(vertex_count, Vec2d(0, 0));
     Vec2d at(0, 0);
     for (size_t j = 0; j < nb; ++j) {
         (*uv)[boundary[j]] = at;
         const double l = length[j] * (1 - Dot(tangent[j], lambda));
-        if (!(l > 0)) return false;
+        if (!(l > 0))
+            return false;
         at += tangent[j] * l;
     }
     // 4. Harmonic extension: A_II x_I = -A_IB x_B.
-    if (n == 0) return true;
+    if (n == 0)
+        return true;
     std::vector<double> rhs(2 * n, 0.0);
     for (size_t t = 0; t < triangles.size(); ++t) {
-        if (flat[t].area == 0) continue;
+        if (flat[t].area == 0)
+            continue;
         for (int i = 0; i < 3; ++i) {
             const uint32_t ri = row[triangles[t][i]];
-            if (ri == kFixed) continue;
+            if (ri == kFixed)
+                continue;
             for (int j = 0; j < 3; ++j) {
                 const uint32_t vj = triangles[t][j];
-                if (!on_boundary[vj]) continue;
+                if (!on_boundary[vj])
+                    continue;
                 const double w = CotanWeight(flat[t], i, j);
                 rhs[ri] -= w * (*uv)[vj].x;
                 rhs[ri + n] -= w * (*uv)[vj].y;
             }
         }
     }
-    if (!interior.Solve(&rhs, 2)) return false;
+    if (!interior.Solve(&rhs, 2))
+        return false;
     for (size_t v = 0; v < vertex_count; ++v)
-        if (row[v] != kFixed) (*uv)[v] = Vec2d(rhs[row[v]], rhs[row[v] + n]);
+        if (row[v] != kFixed)
+            (*uv)[v] = Vec2d(rhs[row[v]], rhs[row[v] + n]);
     return true;
 }
 

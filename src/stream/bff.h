@@ -4,13 +4,13 @@
 // starting map of the local/global refinement (arap.h).
 #pragma once
 
+#include "core/vec.h"
+#include "stream/cotan_laplacian.h"
+
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
-#include "stream/cotan_laplacian.h"
 
 namespace mebake::stream {
 

@@ -1,11 +1,10 @@
 // Triangle flattening and the factorized cotangent Laplacian (see cotan_laplacian.h).
 #include "stream/cotan_laplacian.h"
 
-#include <Eigen/Sparse>
-
-#include <cmath>
-
 #include "core/check.h"
+
+#include <Eigen/Sparse>
+#include <cmath>
 
 namespace mebake::stream {
 
@@ -17,7 +16,8 @@ FlatTriangle FlattenTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) 
     const double l1 = Length(e1);
     const double scale = Dot(e1, e1) + Dot(e2, e2) + Dot(p2 - p1, p2 - p1);
     // Angles below ~1e-12 rad: the gradients would be ~1e12 and swamp the solves.
-    if (!(twice_area > 1e-12 * scale) || !(l1 > 0)) return t;
+    if (!(twice_area > 1e-12 * scale) || !(l1 > 0))
+        return t;
     const Vec3d ax = e1 / l1;
     const Vec3d ay = Cross(n / twice_area, ax);
     // Local coordinates: x0 = (0,0), x1 = (l1, 0), x2 = (e2.ax, e2.ay), counter-clockwise.
@@ -36,8 +36,8 @@ std::vector<FlatTriangle> FlattenTriangles(std::span<const Vec3f> position,
     std::vector<FlatTriangle> flat(triangles.size());
     for (size_t t = 0; t < triangles.size(); ++t) {
         const auto& f = triangles[t];
-        flat[t] = FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]),
-                                  Vec3d(position[f[2]]));
+        flat[t] =
+            FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]), Vec3d(position[f[2]]));
     }
     return flat;
 }
@@ -57,22 +57,28 @@ bool CotanLaplacian::Factorize(std::span<const FlatTriangle> flat,
     row_.assign(vertex_count, kFixed);
     std::vector<char> used(vertex_count, 0);
     for (const auto& f : triangles)
-        for (uint32_t v : f) used[v] = 1;
+        for (uint32_t v : f)
+            used[v] = 1;
     size_ = 0;
     for (size_t v = 0; v < vertex_count; ++v)
-        if (used[v] && !fixed[v]) row_[v] = size_++;
-    if (size_ == 0) return true;
+        if (used[v] && !fixed[v])
+            row_[v] = size_++;
+    if (size_ == 0)
+        return true;
 
     std::vector<Eigen::Triplet<double>> triplets;
     triplets.reserve(triangles.size() * 6);
     for (size_t t = 0; t < triangles.size(); ++t) {
-        if (flat[t].area == 0) continue;
+        if (flat[t].area == 0)
+            continue;
         for (int i = 0; i < 3; ++i) {
             const uint32_t ri = row_[triangles[t][i]];
-            if (ri == kFixed) continue;
+            if (ri == kFixed)
+                continue;
             for (int j = 0; j < 3; ++j) {
                 const uint32_t rj = row_[triangles[t][j]];
-                if (rj == kFixed || rj > ri) continue;  // lower triangle is all LDL^T reads
+                if (rj == kFixed || rj > ri)
+                    continue;  // lower triangle is all LDL^T reads
                 triplets.emplace_back(ri, rj, CotanWeight(flat[t], i, j));
             }
         }
@@ -85,7 +91,8 @@ bool CotanLaplacian::Factorize(std::span<const FlatTriangle> flat,
 
 bool CotanLaplacian::Solve(std::vector<double>* b, int columns) const {
     CHECK_EQ(b->size(), size_t(columns) * size_);
-    if (size_ == 0) return true;
+    if (size_ == 0)
+        return true;
     Eigen::Map<Eigen::MatrixXd> m(b->data(), size_, columns);
     m = impl_->ldlt.solve(m).eval();
     return m.allFinite();

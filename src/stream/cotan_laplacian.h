@@ -4,13 +4,13 @@
 // with AMD ordering. Shared by the parameterization stages (bff, lscm, arap).
 #pragma once
 
+#include "core/vec.h"
+
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 
@@ -45,8 +45,7 @@ public:
     // fixed[v] != 0 removes vertex v (Dirichlet). False if the factorization fails (e.g. a
     // free part of the mesh that no fixed vertex anchors).
     bool Factorize(std::span<const FlatTriangle> flat,
-                   std::span<const std::array<uint32_t, 3>> triangles,
-                   std::span<const char> fixed);
+                   std::span<const std::array<uint32_t, 3>> triangles, std::span<const char> fixed);
 
     static constexpr uint32_t kFixed = ~uint32_t(0);
     uint32_t size() const { return size_; }

@@ -9,11 +9,10 @@
 // holomorphic function is a near-null mode, so the spectrum does not cluster.
 #include "stream/lscm.h"
 
-#include <Eigen/Sparse>
-
-#include <cmath>
-
 #include "core/check.h"
+
+#include <Eigen/Sparse>
+#include <cmath>
 
 namespace mebake::stream {
 
@@ -32,11 +31,14 @@ bool SolveLscm(std::span<const FlatTriangle> flat,
     std::vector<uint32_t> index(vertex_count, kFixed);
     std::vector<char> used(vertex_count, 0);
     for (const auto& f : triangles)
-        for (uint32_t v : f) used[v] = 1;
+        for (uint32_t v : f)
+            used[v] = 1;
     uint32_t free_count = 0;
     for (uint32_t v = 0; v < vertex_count; ++v)
-        if (used[v] && v != pin0 && v != pin1) index[v] = free_count++;
-    if (free_count == 0) return true;
+        if (used[v] && v != pin0 && v != pin1)
+            index[v] = free_count++;
+    if (free_count == 0)
+        return true;
 
     const Eigen::Index n = Eigen::Index(2) * free_count;
     std::vector<Eigen::Triplet<double>> triplets;
@@ -44,7 +46,8 @@ bool SolveLscm(std::span<const FlatTriangle> flat,
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
     for (size_t t = 0; t < triangles.size(); ++t) {
         const FlatTriangle& ft = flat[t];
-        if (ft.area == 0) continue;
+        if (ft.area == 0)
+            continue;
         const double w = std::sqrt(ft.area);
         // Rows of M_T over (u0 u1 u2 v0 v1 v2): sqrt(A) (u_x - v_y) and sqrt(A) (u_y + v_x).
         double m[2][6];
@@ -63,7 +66,8 @@ bool SolveLscm(std::span<const FlatTriangle> flat,
             fixed_value[j] = comp == 0 ? (*uv)[vtx].x : (*uv)[vtx].y;
         }
         for (int a = 0; a < 6; ++a) {
-            if (var[a] == kFixed) continue;
+            if (var[a] == kFixed)
+                continue;
             for (int b = 0; b < 6; ++b) {
                 const double k = m[0][a] * m[0][b] + m[1][a] * m[1][b];
                 if (var[b] == kFixed)
@@ -78,11 +82,14 @@ bool SolveLscm(std::span<const FlatTriangle> flat,
     triplets = {};
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
     solver.compute(matrix);
-    if (solver.info() != Eigen::Success) return false;
+    if (solver.info() != Eigen::Success)
+        return false;
     const Eigen::VectorXd x = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !x.allFinite()) return false;
+    if (solver.info() != Eigen::Success || !x.allFinite())
+        return false;
     for (uint32_t v = 0; v < vertex_count; ++v)
-        if (index[v] != kFixed) (*uv)[v] = Vec2d(x[2 * index[v]], x[2 * index[v] + 1]);
+        if (index[v] != kFixed)
+            (*uv)[v] = Vec2d(x[2 * index[v]], x[2 * index[v] + 1]);
     return true;
 }
 

@@ -2,13 +2,13 @@
 // boundaries: two pinned vertices, everything else free.
 #pragma once
 
+#include "core/vec.h"
+#include "stream/cotan_laplacian.h"
+
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
-#include "stream/cotan_laplacian.h"
 
 namespace mebake::stream {
 

@@ -3,17 +3,16 @@
 // placement, distortion metrics on the final float uv.
 #include "stream/parameterize.h"
 
-#include <fmt/format.h>
-
-#include <algorithm>
-#include <cmath>
-#include <numeric>
-#include <utility>
-
 #include "core/check.h"
 #include "stream/bff.h"
 #include "stream/cotan_laplacian.h"
 #include "stream/lscm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <numeric>
+#include <utility>
 
 namespace mebake::stream {
 
@@ -66,7 +65,8 @@ uint32_t Find(std::vector<uint32_t>& parent, uint32_t v) {
 
 DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 3>> triangles) {
     const size_t tri_count = triangles.size();
-    if (tri_count == 0) return Fail(ParamStatus::kEmpty, "no triangles");
+    if (tri_count == 0)
+        return Fail(ParamStatus::kEmpty, "no triangles");
     if (tri_count > (size_t(1) << 30))
         return Fail(ParamStatus::kBadIndex, "too many triangles for 32-bit half-edge ids");
     for (size_t t = 0; t < tri_count; ++t) {
@@ -82,11 +82,17 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     // directed edges finds twins; a repeated directed edge means > 2 triangles on an edge
     // or two neighbours with opposite orientation.
     const uint32_t half_count = uint32_t(3 * tri_count);
-    auto from = [&](uint32_t h) { return triangles[h / 3][h % 3]; };
-    auto to = [&](uint32_t h) { return triangles[h / 3][(h % 3 + 1) % 3]; };
+    auto from = [&](uint32_t h) {
+        return triangles[h / 3][h % 3];
+    };
+    auto to = [&](uint32_t h) {
+        return triangles[h / 3][(h % 3 + 1) % 3];
+    };
     std::vector<uint32_t> order(half_count);
     std::iota(order.begin(), order.end(), 0u);
-    auto key = [&](uint32_t h) { return (uint64_t(from(h)) << 32) | to(h); };
+    auto key = [&](uint32_t h) {
+        return (uint64_t(from(h)) << 32) | to(h);
+    };
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
         const uint64_t ka = key(a), kb = key(b);
         return ka < kb || (ka == kb && a < b);
@@ -102,13 +108,15 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
         const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
         auto it = std::lower_bound(order.begin(), order.end(), want,
                                    [&](uint32_t x, uint64_t k) { return key(x) < k; });
-        if (it != order.end() && key(*it) == want) twin[h] = *it;
+        if (it != order.end() && key(*it) == want)
+            twin[h] = *it;
     }
 
     // Corners per vertex (CSR), unreferenced vertices, connectivity.
     std::vector<uint32_t> corner_start(size_t(vertex_count) + 1, 0);
     for (const auto& f : triangles)
-        for (uint32_t v : f) ++corner_start[v + 1];
+        for (uint32_t v : f)
+            ++corner_start[v + 1];
     for (uint32_t v = 0; v < vertex_count; ++v) {
         if (corner_start[v + 1] == 0)
             return Fail(ParamStatus::kNotDisc, fmt::format("vertex {} is unreferenced", v));
@@ -117,7 +125,8 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     std::vector<uint32_t> corners(half_count);
     {
         std::vector<uint32_t> fill(corner_start.begin(), corner_start.end() - 1);
-        for (uint32_t h = 0; h < half_count; ++h) corners[fill[from(h)]++] = h;
+        for (uint32_t h = 0; h < half_count; ++h)
+            corners[fill[from(h)]++] = h;
     }
     std::vector<uint32_t> parent(vertex_count);
     std::iota(parent.begin(), parent.end(), 0u);
@@ -133,15 +142,19 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     // Vertex manifoldness: the corners around each vertex form a single fan. The corner
     // whose outgoing half-edge is h continues across twin(h) to the corner whose
     // outgoing half-edge follows twin(h) in its triangle.
-    auto next_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 1) % 3; };
-    auto prev_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 2) % 3; };
+    auto next_in_tri = [](uint32_t h) {
+        return h - h % 3 + (h % 3 + 1) % 3;
+    };
+    auto prev_in_tri = [](uint32_t h) {
+        return h - h % 3 + (h % 3 + 2) % 3;
+    };
     uint32_t boundary_half = kNone;
     uint32_t boundary_count = 0;
     for (uint32_t v = 0; v < vertex_count; ++v) {
         uint32_t start = corners[corner_start[v]];
         uint32_t open_fans = 0;
         for (uint32_t c = corner_start[v]; c < corner_start[v + 1]; ++c) {
-            const uint32_t h = corners[c];  // outgoing from v
+            const uint32_t h = corners[c];        // outgoing from v
             if (twin[prev_in_tri(h)] == kNone) {  // incoming edge on the boundary
                 ++open_fans;
                 start = h;
@@ -158,25 +171,31 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
                 break;
             }
             h = next_in_tri(twin[h]);
-            if (h == start) break;
-            if (++visited > corner_start[v + 1] - corner_start[v]) break;
+            if (h == start)
+                break;
+            if (++visited > corner_start[v + 1] - corner_start[v])
+                break;
         }
         if (visited != corner_start[v + 1] - corner_start[v])
             return Fail(ParamStatus::kNonManifold,
                         fmt::format("vertex {} is pinched (its triangles form several fans)", v));
     }
-    if (boundary_count == 0) return Fail(ParamStatus::kNotDisc, "closed surface (no boundary)");
+    if (boundary_count == 0)
+        return Fail(ParamStatus::kNotDisc, "closed surface (no boundary)");
 
     // Boundary loops: each boundary vertex has one outgoing boundary half-edge.
     std::vector<uint32_t> boundary_out(vertex_count, kNone);
     for (uint32_t h = 0; h < half_count; ++h)
-        if (twin[h] == kNone) boundary_out[from(h)] = h;
+        if (twin[h] == kNone)
+            boundary_out[from(h)] = h;
     DiscCheck result;
     for (uint32_t h = boundary_half;;) {
         result.boundary.push_back(from(h));
         h = boundary_out[to(h)];
-        if (h == boundary_half) break;
-        if (result.boundary.size() > boundary_count) break;  // cannot happen once manifold
+        if (h == boundary_half)
+            break;
+        if (result.boundary.size() > boundary_count)
+            break;  // cannot happen once manifold
     }
     if (result.boundary.size() != boundary_count)
         return Fail(ParamStatus::kNotDisc,
@@ -185,9 +204,9 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     const int64_t edges = (int64_t(half_count) + boundary_count) / 2;
     const int64_t euler = int64_t(vertex_count) - edges + int64_t(tri_count);
     if (euler != 1)
-        return Fail(ParamStatus::kNotDisc,
-                    fmt::format("Euler characteristic {} (a disc has 1): the chart has handles",
-                                euler));
+        return Fail(
+            ParamStatus::kNotDisc,
+            fmt::format("Euler characteristic {} (a disc has 1): the chart has handles", euler));
     return result;
 }
 
@@ -200,8 +219,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
     double sum_3d = 0, sum_uv = 0;
     for (size_t t = 0; t < tri_count; ++t) {
         const auto& f = triangles[t];
-        flat[t] = FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]),
-                                  Vec3d(position[f[2]]));
+        flat[t] =
+            FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]), Vec3d(position[f[2]]));
         const Vec3d p0(position[f[0]]);
         area_3d[t] = 0.5 * Length(Cross(Vec3d(position[f[1]]) - p0, Vec3d(position[f[2]]) - p0));
         const Vec2d q0(uv[f[0]].x, uv[f[0]].y), q1(uv[f[1]].x, uv[f[1]].y),
@@ -237,7 +256,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
         }
         // Singular values of the 2x2 Jacobian J = [[a, b], [c, d]] (flat frame -> uv).
         const FlatTriangle& ft = flat[t];
-        if (ft.area == 0) continue;
+        if (ft.area == 0)
+            continue;
         double a = 0, b = 0, c = 0, d = 0;
         for (int j = 0; j < 3; ++j) {
             const Vec2f& p = uv[triangles[t][j]];
@@ -267,7 +287,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
         cell_uv[iy * kCells + ix] += s2 * area_uv[t];
     }
     double coarse = 0;
-    for (int c = 0; c < kCells * kCells; ++c) coarse += std::abs(cell_3d[c] - cell_uv[c]);
+    for (int c = 0; c < kCells * kCells; ++c)
+        coarse += std::abs(cell_3d[c] - cell_uv[c]);
     m.jacobian_deviation_coarse = sum_3d > 0 ? coarse / sum_3d : 0;
     m.conformal_mean = conformal_weight > 0 ? conformal_sum / conformal_weight : 1;
     std::sort(weighted_dev.begin(), weighted_dev.end());
@@ -276,7 +297,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
     for (const auto& [dev, w] : weighted_dev) {
         acc += w;
         m.jacobian_deviation_p95 = dev;
-        if (acc >= 0.95 * sum_3d) break;
+        if (acc >= 0.95 * sum_3d)
+            break;
     }
 }
 
@@ -332,7 +354,8 @@ bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
         return false;
     }
     out->metrics.init_flipped = CountFlips(*uv, chart.triangles);
-    if (!options.refine) return true;
+    if (!options.refine)
+        return true;
 
     std::vector<char> fixed(vertex_count, 0);
     fixed[pin0] = 1;
@@ -342,7 +365,8 @@ bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
         out->message = "Laplacian factorization failed";
         return false;
     }
-    ArapReport report = RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
+    ArapReport report =
+        RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
     uint32_t flips = CountFlips(*uv, chart.triangles);
     if (flips > 0 && out->metrics.init == ParamInit::kBff) {
         // BFF's harmonic interior can fold on bad triangles; LSCM rarely does.
@@ -350,8 +374,8 @@ bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
         bff_uv.swap(*uv);
         if (lscm()) {
             const uint32_t lscm_flips = CountFlips(*uv, chart.triangles);
-            const ArapReport second = RefineArap(flat, chart.triangles, laplacian, pin0,
-                                                 options.refine_options, uv);
+            const ArapReport second =
+                RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
             const uint32_t second_flips = CountFlips(*uv, chart.triangles);
             if (second_flips < flips) {
                 out->metrics.init = ParamInit::kLscm;
@@ -397,7 +421,8 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
 
     const std::vector<FlatTriangle> flat = FlattenTriangles(chart.position, chart.triangles);
     double total_area = 0;
-    for (const FlatTriangle& ft : flat) total_area += ft.area;
+    for (const FlatTriangle& ft : flat)
+        total_area += ft.area;
     if (!(total_area > 0)) {
         out.status = ParamStatus::kDegenerate;
         out.message = "all triangles are degenerate";
@@ -405,7 +430,8 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
     }
 
     std::vector<Vec2d> uv;
-    if (!Flatten(chart, flat, disc.boundary, options, &uv, &out)) return out;
+    if (!Flatten(chart, flat, disc.boundary, options, &uv, &out))
+        return out;
 
     const SquareFit fit = FitUnitSquare(uv, options.margin, options.objective);
     out.uv.resize(vertex_count);
@@ -415,7 +441,8 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
     }
     MeasureDistortion(chart.position, chart.triangles, out.uv, &out);
     std::vector<Vec2d> final_uv(vertex_count);
-    for (uint32_t v = 0; v < vertex_count; ++v) final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
+    for (uint32_t v = 0; v < vertex_count; ++v)
+        final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
     out.metrics.flipped = CountFlips(final_uv, chart.triangles);
 
     if (out.metrics.flipped > 0) {
@@ -423,9 +450,9 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
         out.message = fmt::format("{} flipped uv triangles", out.metrics.flipped);
     } else if (out.metrics.jacobian_deviation_coarse > options.max_jacobian_deviation) {
         out.status = ParamStatus::kDistorted;
-        out.message = fmt::format("coarse Jacobian deviation {:.4f} > {:.4f}",
-                                  out.metrics.jacobian_deviation_coarse,
-                                  options.max_jacobian_deviation);
+        out.message =
+            fmt::format("coarse Jacobian deviation {:.4f} > {:.4f}",
+                        out.metrics.jacobian_deviation_coarse, options.max_jacobian_deviation);
     } else {
         out.status = ParamStatus::kOk;
     }

@@ -1,15 +1,15 @@
 #include "stream/chart_grid.h"
 
-#include <fmt/format.h>
+#include "stream/parameterize.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <functional>
 #include <numbers>
 #include <random>
-
-#include "stream/parameterize.h"
 
 namespace mebake::stream {
 namespace {
@@ -29,15 +29,20 @@ TriMesh GridPatch(int n, uint32_t seed, const std::function<Vec3d(double, double
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
             double x = i * h, y = j * h;
-            if (i > 0 && i < n - 1) x += jit(rng) * h;
-            if (j > 0 && j < n - 1) y += jit(rng) * h;
+            if (i > 0 && i < n - 1)
+                x += jit(rng) * h;
+            if (j > 0 && j < n - 1)
+                y += jit(rng) * h;
             m.position.push_back(Vec3f(surface(x, y)));
         }
     }
-    auto id = [n](int i, int j) { return uint32_t(j * n + i); };
+    auto id = [n](int i, int j) {
+        return uint32_t(j * n + i);
+    };
     for (int j = 0; j + 1 < n; ++j) {
         for (int i = 0; i + 1 < n; ++i) {
-            if (keep && !keep(i, j)) continue;
+            if (keep && !keep(i, j))
+                continue;
             m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
             m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
         }
@@ -68,7 +73,9 @@ struct Brute {
     uint32_t triangle = kNoTriangle;
 };
 
-Vec2d D(const Vec2f& v) { return {v.x, v.y}; }
+Vec2d D(const Vec2f& v) {
+    return {v.x, v.y};
+}
 
 double SegmentDist2(const Vec2d& u, const Vec2d& a, const Vec2d& b) {
     const Vec2d e = b - a;
@@ -83,7 +90,8 @@ double TriDist2(const std::vector<Vec2f>& uv, const std::array<uint32_t, 3>& f, 
     const Vec2d a = D(uv[f[0]]), b = D(uv[f[1]]), c = D(uv[f[2]]);
     const double s0 = Cross(b - a, u - a), s1 = Cross(c - b, u - b), s2 = Cross(a - c, u - c);
     const bool inside = (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0);
-    if (inside && Cross(b - a, c - a) != 0) return 0;
+    if (inside && Cross(b - a, c - a) != 0)
+        return 0;
     return std::min({SegmentDist2(u, a, b), SegmentDist2(u, b, c), SegmentDist2(u, c, a)});
 }
 
@@ -112,14 +120,18 @@ int CheckAgainstBruteForce(const ChartGrid& grid, const std::vector<Vec2f>& samp
         const Vec2d u = D(s);
         const Brute brute = BruteNearest(grid.uv, grid.triangles, u);
         EXPECT_NE(loc.triangle, kNoTriangle);
-        if (loc.triangle == kNoTriangle) return virtual_count;
+        if (loc.triangle == kNoTriangle)
+            return virtual_count;
         EXPECT_NEAR(loc.barycentric[0] + loc.barycentric[1] + loc.barycentric[2], 1.0, 1e-6);
-        for (float b : loc.barycentric) EXPECT_GE(b, 0.f);
+        for (float b : loc.barycentric)
+            EXPECT_GE(b, 0.f);
         const double own2 = TriDist2(grid.uv, grid.triangles[loc.triangle], u);
         if (loc.real) {
-            EXPECT_LE(own2, kInside2) << fmt::format("{} said real in triangle {}", s, loc.triangle);
-            EXPECT_LT(Length(Interpolate(grid.uv, grid.triangles[loc.triangle], loc.barycentric) - u),
-                      1e-6);
+            EXPECT_LE(own2, kInside2)
+                << fmt::format("{} said real in triangle {}", s, loc.triangle);
+            EXPECT_LT(
+                Length(Interpolate(grid.uv, grid.triangles[loc.triangle], loc.barycentric) - u),
+                1e-6);
             continue;
         }
         ++virtual_count;
@@ -139,7 +151,8 @@ std::vector<Vec2f> RandomPoints(int count, uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0, 1);
     std::vector<Vec2f> p(count);
-    for (Vec2f& q : p) q = Vec2f(u(rng), u(rng));
+    for (Vec2f& q : p)
+        q = Vec2f(u(rng), u(rng));
     return p;
 }
 
@@ -192,10 +205,12 @@ TEST(ChartGrid, VirtualPointsGetTheTrueNearestTriangle) {
 TEST(ChartGrid, ConcaveChartAndAnyResolution) {
     // A U-shaped flat chart (a notch cut from one side) mapped to uv by its own x, y: in
     // the notch the nearest triangle switches between the two arms.
-    const TriMesh m = GridPatch(25, 5, [](double x, double y) { return Vec3d(x, y, 0); },
-                                [](int i, int j) { return !(i >= 8 && i < 16 && j >= 6); });
+    const TriMesh m = GridPatch(
+        25, 5, [](double x, double y) { return Vec3d(x, y, 0); },
+        [](int i, int j) { return !(i >= 8 && i < 16 && j >= 6); });
     std::vector<Vec2f> uv;
-    for (const Vec3f& q : m.position) uv.push_back(Vec2f(0.1f + 0.8f * q.x, 0.15f + 0.7f * q.y));
+    for (const Vec3f& q : m.position)
+        uv.push_back(Vec2f(0.1f + 0.8f * q.x, 0.15f + 0.7f * q.y));
     const std::vector<Vec2f> samples = RandomPoints(3000, 6);
     std::vector<GridLocation> first;
     for (const int resolution : {1, 3, 17, 35, 200}) {
@@ -204,7 +219,8 @@ TEST(ChartGrid, ConcaveChartAndAnyResolution) {
         EXPECT_GT(virtual_count, 1000);
         // Every resolution answers the same.
         std::vector<GridLocation> locs;
-        for (const Vec2f& s : samples) locs.push_back(grid.Locate(s));
+        for (const Vec2f& s : samples)
+            locs.push_back(grid.Locate(s));
         if (first.empty()) {
             first = locs;
             continue;
@@ -293,7 +309,8 @@ TEST(ChartGridEvaluate, ContinuousAcrossTheBoundary) {
     const float eps = 2e-4f;
     int checked = 0;
     for (size_t k = 0; k < disc.boundary.size(); ++k) {
-        const Vec2f a = p.uv[disc.boundary[k]], b = p.uv[disc.boundary[(k + 1) % disc.boundary.size()]];
+        const Vec2f a = p.uv[disc.boundary[k]],
+                    b = p.uv[disc.boundary[(k + 1) % disc.boundary.size()]];
         const Vec2f mid = (a + b) * 0.5f, e = b - a;
         const float len = Length(e);
         // The boundary runs counter-clockwise around the chart: outside is on the right.
@@ -301,7 +318,8 @@ TEST(ChartGridEvaluate, ContinuousAcrossTheBoundary) {
         const SurfacePoint inside = Evaluate(grid, m.position, normals, mid - out * eps);
         const SurfacePoint outside = Evaluate(grid, m.position, normals, mid + out * eps);
         const SurfacePoint on = Evaluate(grid, m.position, normals, mid);
-        if (!inside.real || outside.real) continue;  // a concave corner; skip
+        if (!inside.real || outside.real)
+            continue;  // a concave corner; skip
         ++checked;
         const double jump = Length(Vec3d(outside.position) - Vec3d(inside.position));
         EXPECT_LT(jump, 3 * eps * p.scale) << k;
