@@ -31,7 +31,7 @@
 // deviation before refinement instead of 6%, and 1.3x the shear after it).
 // Real scan charts (nefertiti, lucy; region growing under normal cones of 20-70 degrees,
 // 500-27K triangles): dev mean 0.04-0.9%, coarse <= 0.12%. So the seed's 1% threshold,
-// applied to the coarse deviation, splits hemisphere-like charts (caps beyond ~75
+// applied to the coarse deviation, splits hemisphere-like charts (caps beyond ~80
 // degrees), not charts that are merely noisy or strongly curved in one direction.
 #pragma once
 

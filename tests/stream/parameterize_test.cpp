@@ -439,6 +439,25 @@ TEST(ParameterizeChart, RejectsMalformedCharts) {
     EXPECT_EQ(p.status, ParamStatus::kNonManifold) << p.message;
 }
 
+TEST(ParameterizeChart, DegenerateTrianglesAreSurvived) {
+    // Interior vertices moved onto a neighbour's edge line: zero-area triangles inside.
+    TriMesh m = GridPatch(17, 10, Plane, 0);
+    for (const int i : {3, 7, 11}) {
+        const uint32_t v = uint32_t(5 * 17 + i);
+        m.position[v] = (m.position[v - 1] + m.position[v + 1]) * 0.5f;
+    }
+    const ChartParam p = ParameterizeChart(m);
+    ASSERT_TRUE(HasUv(p.status)) << p.message;
+    for (const Vec2f& q : p.uv)
+        EXPECT_TRUE(q.x >= 0 && q.x <= 1 && q.y >= 0 && q.y <= 1);
+    EXPECT_LT(p.metrics.jacobian_deviation_mean, 0.01);
+
+    // Everything on one line: nothing to flatten.
+    TriMesh line = GridPatch(
+        5, 11, [](double x, double) { return Vec3d(x, 0, 0); }, 0);
+    EXPECT_EQ(ParameterizeChart(line).status, ParamStatus::kDegenerate);
+}
+
 TEST(CheckDisc, ReturnsTheBoundaryLoopInWindingOrder) {
     const TriMesh m = GridPatch(4, 9, Plane, 0);
     const DiscCheck c = CheckDisc(uint32_t(m.vertex_count()), m.triangles);
