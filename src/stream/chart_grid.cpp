@@ -147,7 +147,7 @@ double TriBoxDist2(const Tri2& t, const Box& b) {
 // A bounding-volume hierarchy over the outline triangles, used at build time only.
 class OutlineBvh {
 public:
-    OutlineBvh(const std::vector<Tri2>& tris) : tris_(tris) {
+    explicit OutlineBvh(const std::vector<Tri2>& tris) : tris_(tris) {
         prims_.resize(tris.size());
         std::iota(prims_.begin(), prims_.end(), 0u);
         boxes_.resize(tris.size());
@@ -164,10 +164,11 @@ public:
     }
 
     // Index (into the outline list) of the triangle nearest to u; lowest index on ties.
-    uint32_t Nearest(const Vec2d& u) const {
+    uint32_t Nearest(const Vec2d& u) {
         uint32_t best = kNoTriangle;
         double best_d2 = INFINITY;
-        std::vector<uint32_t> stack = {0};
+        std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
+        stack.assign(1, 0);
         while (!stack.empty()) {
             const Node& node = nodes_[stack.back()];
             stack.pop_back();
@@ -194,8 +195,9 @@ public:
     }
 
     // Appends the outline indices of triangles within sqrt(r2) of box b.
-    void WithinBox(const Box& b, double r2, std::vector<uint32_t>* out) const {
-        std::vector<uint32_t> stack = {0};
+    void WithinBox(const Box& b, double r2, std::vector<uint32_t>* out) {
+        std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
+        stack.assign(1, 0);
         while (!stack.empty()) {
             const Node& node = nodes_[stack.back()];
             stack.pop_back();
@@ -220,8 +222,8 @@ private:
     };
     static constexpr uint32_t kLeafSize = 4;
 
-    // Builds the node for prims_[begin, end) at nodes_[index]; returns nothing, children
-    // are allocated in pairs so a node only stores its left child.
+    // Builds the tree over prims_[begin, end) with a work list (no recursion). Children
+    // are allocated in pairs, so a node only stores its left child.
     void BuildNode(uint32_t begin, uint32_t end) {
         nodes_.push_back({});
         std::vector<std::array<uint32_t, 3>> work = {{0, begin, end}};  // node, begin, end
@@ -266,6 +268,7 @@ private:
     std::vector<uint32_t> prims_;
     std::vector<Box> boxes_;
     std::vector<Node> nodes_;
+    std::vector<uint32_t> stack_;
 };
 
 struct LocateResult {
@@ -447,7 +450,7 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     std::vector<Tri2> outline_geom(g.outline_tris.size());
     for (size_t i = 0; i < g.outline_tris.size(); ++i)
         outline_geom[i] = tris[g.outline_tris[i]];
-    const OutlineBvh bvh(outline_geom);
+    OutlineBvh bvh(outline_geom);
 
     g.near_start.assign(cell_count + 1, 0);
     std::vector<uint32_t> found;
