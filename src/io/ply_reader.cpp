@@ -33,7 +33,7 @@ constexpr size_t kMaxFixedStride = size_t(1) << 16;  // larger records use the g
 constexpr size_t kChunkBytes = size_t(1) << 18;      // bytes decoded per fixed-stride step
 constexpr size_t kMaxToken = 4096;                   // longest ASCII token accepted
 
-// What a property is for. Vertex scalars index VertexValues::v.
+// What a property is for. The value roles (kX .. kV) index the per-record value array.
 enum Role : uint8_t {
     kX,
     kY,
@@ -193,14 +193,16 @@ public:
           vertex_count_(vcount),
           batch_vertices_(std::max<size_t>(opt.batch_vertices, 1)),
           batch_faces_(std::max<size_t>(opt.batch_faces, 1)),
-          batch_corners_(std::max<size_t>(batch_faces_ * 4, 64)) {}
+          batch_corners_(batch_faces_ > (size_t(1) << 40) ? batch_faces_ : batch_faces_ * 4) {}
 
-    // Sizes the batches once (bounded by the options, whatever the header claims) so they
-    // do not grow by reallocation, which costs more than the decoding on small files.
+    // Sizes the batches once so they do not grow by reallocation, which costs more than
+    // the decoding on small files. Bounded by the options and kMaxReserve, never by what
+    // the header claims.
     void Reserve(uint64_t vertices, uint64_t faces, bool normals, bool colors, bool alpha,
                  bool uvs) {
-        const size_t nv = size_t(std::min<uint64_t>(vertices, batch_vertices_));
-        const size_t nf = size_t(std::min<uint64_t>(faces, batch_faces_));
+        constexpr uint64_t kMaxReserve = uint64_t(1) << 20;
+        const size_t nv = size_t(std::min<uint64_t>({vertices, batch_vertices_, kMaxReserve}));
+        const size_t nf = size_t(std::min<uint64_t>({faces, batch_faces_, kMaxReserve}));
         vb.position.reserve(nv);
         if (normals)
             vb.normal.reserve(nv);
@@ -288,8 +290,7 @@ struct StripState {
 
 // Converts one vertex's values (as doubles, in role order) and appends it; checks that
 // all are finite. Integer colours map to [0,1] by their type's maximum, float colours
-// are clamped to [0,1].
-// The position for messages is the record's byte offset, or its line for ASCII.
+// are clamped to [0,1]. Messages name the record's byte offset, or its line for ASCII.
 void AppendVertex(const double* v, const Plan& plan, Emitter& em, const std::string& file,
                   uint64_t offset, uint64_t line) {
     auto finite = [&](int role) {

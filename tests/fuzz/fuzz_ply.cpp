@@ -1,17 +1,17 @@
 // libFuzzer target for the PLY reader: any bytes must either read into a mesh that keeps
 // the streaming contract or throw mebake::Error; never crash, hang or over-allocate.
 // A mesh that reads is also written back (binary PLY) and must read back identically.
-#include <cmath>
-#include <cstddef>
-#include <cstdint>
-#include <span>
-#include <vector>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "io/mesh_stream.h"
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
 
 namespace {
 
@@ -39,8 +39,10 @@ struct Collect : MeshSink {
         for (const Vec3f& p : b.position)
             CHECK(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
         for (const Vec3f& c : b.color)
-            for (int k = 0; k < 3; ++k) CHECK(c[k] >= 0 && c[k] <= 1);
-        for (float a : b.alpha) CHECK(a >= 0 && a <= 1);
+            for (int k = 0; k < 3; ++k)
+                CHECK(c[k] >= 0 && c[k] <= 1);
+        for (float a : b.alpha)
+            CHECK(a >= 0 && a <= 1);
         position.insert(position.end(), b.position.begin(), b.position.end());
         normal.insert(normal.end(), b.normal.begin(), b.normal.end());
         color.insert(color.end(), b.color.begin(), b.color.end());
@@ -56,7 +58,8 @@ struct Collect : MeshSink {
             corners += n;
         }
         CHECK_EQ(corners, b.index.size());
-        for (uint64_t v : b.index) CHECK_LT(v, header.vertex_count);
+        for (uint64_t v : b.index)
+            CHECK_LT(v, header.vertex_count);
         size.insert(size.end(), b.size.begin(), b.size.end());
         index.insert(index.end(), b.index.begin(), b.index.end());
     }
@@ -83,7 +86,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } catch (const mebake::Error&) {
         return 0;
     }
-    if (mesh.big_polygon) return 0;  // the writer stores at most 255 corners per face
+    if (mesh.big_polygon)
+        return 0;  // the writer stores at most 255 corners per face
 
     // Write it back and read it again: the same mesh, bit for bit.
     std::vector<uint8_t> out_bytes;
@@ -101,11 +105,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vb.color = mesh.color;
     vb.alpha = mesh.alpha;
     vb.uv = mesh.uv;
-    if (vb.size() > 0) writer->Vertices(vb);
+    if (vb.size() > 0)
+        writer->Vertices(vb);
     FaceBatch fb;
     fb.size = mesh.size;
     fb.index = mesh.index;
-    if (fb.count() > 0) writer->Faces(fb);
+    if (fb.count() > 0)
+        writer->Faces(fb);
     writer->End({});
 
     Collect again;

@@ -544,6 +544,43 @@ TEST(PlyMalformed, Indices) {
     ExpectError(AsciiTriangle("0", "3 0 1 2.0"));
 }
 
+std::string ErrorOf(const std::string& bytes) {
+    try {
+        ReadString(bytes, "bad.ply");
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+TEST(PlyMalformed, ErrorsNameThePlace) {
+    // Binary: the third of three triangles names vertex 7; its byte offset is exact.
+    const std::string header =
+        Header("binary_little_endian", "element vertex 3\nproperty float x\nproperty float y\n"
+                                       "property float z\nelement face 3\n"
+                                       "property list uchar int vertex_indices\n");
+    Bin b;
+    for (int i = 0; i < 9; ++i)
+        b.Put(0.0f);
+    for (int f = 0; f < 3; ++f)
+        b.Put(uint8_t(3)).Put(int32_t(0)).Put(int32_t(1)).Put(int32_t(f == 2 ? 7 : 2));
+    const size_t offset = header.size() + 36 + 2 * 13 + 1 + 2 * 4;
+    EXPECT_EQ(ErrorOf(header + b.s),
+              fmt::format("bad.ply: byte {}: face 2: vertex index 7 out of range, the header "
+                          "declares 3 vertices",
+                          offset));
+    // ASCII: line numbers count the header (9 lines here) and the body.
+    EXPECT_EQ(ErrorOf(AsciiTriangle("0", "3 0 1 5")),
+              "bad.ply: line 13: face 0: vertex index 5 out of range, the header declares 3 "
+              "vertices");
+    EXPECT_EQ(ErrorOf(AsciiTriangle("abc")).rfind("bad.ply: line 10: vertex 0, property 'x'", 0),
+              0u);
+    // A non-finite coordinate in binary names the vertex record.
+    const size_t body = Header("binary_little_endian", kTriDecl).size();
+    EXPECT_EQ(ErrorOf(BinaryTriangle(false, std::numeric_limits<float>::infinity())),
+              fmt::format("bad.ply: byte {}: vertex 0: x = inf is not a finite float", body));
+}
+
 TEST(PlyMalformed, NonFiniteCoordinates) {
     ExpectError(BinaryTriangle(false, std::numeric_limits<float>::quiet_NaN()), "finite");
     ExpectError(BinaryTriangle(true, std::numeric_limits<float>::infinity()), "finite");
