@@ -123,6 +123,14 @@ RTCBuildQuality ToEmbree(BuildQuality q) {
     return RTC_BUILD_QUALITY_MEDIUM;
 }
 
+// The coherent hint is passed to the stream API only: with Embree 3.13.5 (Debian build, AVX-512)
+// rtcOccluded16 with RTC_INTERSECT_CONTEXT_FLAG_COHERENT on a robust scene never returns for
+// some bundles of segments (seen on a 180K-triangle height field); see visibility_test.
+RTCIntersectContextFlags ContextFlags(const VisibilityOptions& o) {
+    return o.coherent && o.method == TraceMethod::kStream ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                                          : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+}
+
 constexpr float kNegInf = -std::numeric_limits<float>::infinity();
 constexpr size_t kChunk = 256;  // rays per stream call (on the stack: 256 * 48 bytes)
 
@@ -338,8 +346,7 @@ void VisibilityScene::Occluded(std::span<const Segment> segments,
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = options_.coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                  : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags = ContextFlags(options_);
     RTCScene scene = impl_->scene;
     switch (options_.method) {
     case TraceMethod::kStream: {
@@ -390,8 +397,7 @@ void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = options_.coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                  : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags = ContextFlags(options_);
     RTCScene scene = impl_->scene;
     switch (options_.method) {
     case TraceMethod::kStream: {

@@ -53,8 +53,10 @@ struct VisibilityOptions {
     bool compact = true;  // RTC_SCENE_FLAG_COMPACT: smaller BVH, slightly slower traversal
     bool robust = true;   // RTC_SCENE_FLAG_ROBUST: watertight, no leaks through shared edges
     BuildQuality quality = BuildQuality::kMedium;
-    TraceMethod method = TraceMethod::kPacket16;
-    bool coherent = false;  // RTC_INTERSECT_CONTEXT_FLAG_COHERENT (batches of similar rays)
+    TraceMethod method = TraceMethod::kStream;  // fastest for node-to-node bundles here
+    // RTC_INTERSECT_CONTEXT_FLAG_COHERENT for batches of similar rays; used with kStream only
+    // (packets ignore it: Embree 3.13.5 can hang in rtcOccluded16 with it, see visibility.cpp).
+    bool coherent = false;
 };
 
 class VisibilityScene {
