@@ -271,6 +271,30 @@ TEST(Visibility, RandomSoupAgreesWithBruteForce) {
     }
 }
 
+TEST(Visibility, SharedBuffersGiveTheSameAnswers) {
+    Soup soup = RandomSoup(3000, 71);
+    const size_t nv = soup.p.size() / 3;
+    const std::vector<Segment> segs = RandomSegments(5000, 72);
+    VisibilityScene copied;
+    copied.AddTriangles(soup.p, soup.t);
+    copied.Commit();
+    std::vector<float> padded = soup.p;
+    EXPECT_THROW(VisibilityScene().AddTrianglesShared(padded, nv, soup.t), Error);  // no spare
+    padded.push_back(0.0f);
+    const int64_t before = EmbreeMemoryBytes();
+    VisibilityScene shared;
+    EXPECT_EQ(shared.AddTrianglesShared(padded, nv, soup.t), 0u);
+    shared.Commit();
+    // The BVH is counted, the shared arrays are not.
+    EXPECT_GT(EmbreeMemoryBytes(), before);
+    std::vector<uint8_t> a(segs.size()), b(segs.size());
+    copied.Occluded(segs, a);
+    shared.Occluded(segs, b);
+    EXPECT_EQ(a, b);
+    std::vector<uint32_t> bad = {0, 1, uint32_t(nv)};
+    EXPECT_THROW(VisibilityScene().AddTrianglesShared(padded, nv, bad), Error);
+}
+
 TEST(Visibility, ConcurrentQueriesMatchSerial) {
     const Soup soup = RandomSoup(20000, 31);
     const std::vector<Segment> segs = RandomSegments(50000, 32);
