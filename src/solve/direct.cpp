@@ -117,24 +117,24 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
-void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out) const {
+void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
+                           int parts) const {
     CHECK_EQ(out.size(), points.size() * 9);
     std::fill(out.begin(), out.end(), 0.f);
     SegmentBatch batch;
     std::vector<float> fraction(points.size());
 
     for (const auto& l : lights_) {
+        if (!(parts & kLights)) break;
         // 1. Classify each point with a few rays (skip points the light cannot reach).
         batch.Clear();
         std::vector<uint8_t> faces(points.size(), 0);
         for (size_t p = 0; p < points.size(); ++p) {
             const auto& rp = points[p];
+            // E does not involve the receiver's normal (that is what keeps it smooth on
+            // noisy scans): what lies below the surface is removed by visibility alone.
             double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
-            bool front = side > 0 || (l.two_sided && side < 0);
-            // Some of the light must be above the receiver's horizon.
-            bool above = false;
-            for (const auto& v : l.vertices) above |= Dot(v - Vec3d(rp.position), Vec3d(rp.normal)) > 0;
-            faces[p] = front && above;
+            faces[p] = side > 0 || (l.two_sided && side < 0);
             if (!faces[p]) continue;
             Vec3f o = rp.vis_point + rp.normal * offset_;
             for (const auto& c : l.classify) batch.AddSegment(o, c);
@@ -165,53 +165,43 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
         };
         at = 0;
         for (size_t p : penumbra) {
-            const Vec3d x(points[p].position), n(points[p].normal);
+            const Vec3d x(points[p].position);
             Vec3d e{};
-            for (size_t k = 0; k < l.cells.size(); ++k) {
-                if (batch.occluded[at++]) continue;
-                auto clipped = ClipToHalfSpace(l.cells[k], x, n);
-                if (clipped.size() >= 3) e += VectorIrradiance(clipped, 1.0, x, emission);
-            }
+            for (size_t k = 0; k < l.cells.size(); ++k)
+                if (!batch.occluded[at++]) e += VectorIrradiance(l.cells[k], 1.0, x, emission);
             add(p, e);
         }
-        // 3. Fully lit points: the closed form, clipped to the receiver's upper hemisphere.
-        for (size_t p = 0; p < points.size(); ++p) {
-            if (fraction[p] <= 0) continue;
-            const Vec3d x(points[p].position), n(points[p].normal);
-            auto clipped = ClipToHalfSpace(l.vertices, x, n);
-            if (clipped.size() >= 3) add(p, VectorIrradiance(clipped, 1.0, x, emission));
-        }
+        // 3. Fully lit points: the closed form.
+        for (size_t p = 0; p < points.size(); ++p)
+            if (fraction[p] > 0) add(p, VectorIrradiance(l.vertices, 1.0, Vec3d(points[p].position), emission));
     }
 
-    if (sky_.type != Sky::Type::None) {
+    if (sky_.type != Sky::Type::None && (parts & kSky)) {
+        // Fixed world-frame directions about the sky's up axis (cosine-weighted), so E
+        // changes with position only where visibility does.
         batch.Clear();
         const Vec3f up(sky_.up);
-        std::vector<Vec3f> dirs;
-        dirs.reserve(points.size() * sky_dirs_.size());
+        Vec3f t, b;
+        Frame(up, &t, &b);
+        std::vector<Vec3f> dirs(sky_dirs_.size());
+        for (size_t k = 0; k < sky_dirs_.size(); ++k)
+            dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
         for (const auto& rp : points) {
-            Vec3f t, b;
-            Frame(rp.normal, &t, &b);
-            Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& d : sky_dirs_) {
-                Vec3f w = t * d.x + b * d.y + rp.normal * d.z;
-                dirs.push_back(w);
-                if (Dot(w, up) > 0) batch.Add(o, w, far_);
-            }
+            const Vec3f o = rp.vis_point + rp.normal * offset_;
+            for (const auto& w : dirs) batch.Add(o, w, far_);
         }
         batch.Trace(vis_);
         // Estimator of E = integral of L(w) V w dw with pdf cos/pi: sum L w pi / (cos N).
         const float scale = float(std::numbers::pi) / float(sky_dirs_.size());
-        size_t at = 0, di = 0;
+        size_t at = 0;
         for (size_t p = 0; p < points.size(); ++p) {
-            for (size_t k = 0; k < sky_dirs_.size(); ++k, ++di) {
-                const Vec3f& w = dirs[di];
-                float cos_up = Dot(w, up);
-                if (cos_up <= 0) continue;
+            for (size_t k = 0; k < dirs.size(); ++k) {
                 if (batch.occluded[at++]) continue;
-                float cos_n = std::max(sky_dirs_[k].z, 1e-3f);
-                double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
+                const Vec3f& w = dirs[k];
+                const float cos_up = std::max(sky_dirs_[k].z, 1e-3f);
+                const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
                 for (int c = 0; c < 3; ++c) {
-                    float l = float(sky_.radiance[c] * gain) * scale / cos_n;
+                    const float l = float(sky_.radiance[c] * gain) * scale / cos_up;
                     for (int e = 0; e < 3; ++e) out[p * 9 + size_t(3 * c + e)] += l * w[e];
                 }
             }

@@ -26,9 +26,13 @@ class DirectLight {
 public:
     DirectLight(const Scene& scene, const VisibilityScene& vis, float ray_offset, float scene_size);
 
-    // E (3 colours x 3 components, out[3*c + k]) at each point.
-    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out) const;
-    bool empty() const { return lights_.empty() && sky_.type == Sky::Type::None; }
+    enum Parts { kLights = 1, kSky = 2, kAll = 3 };
+    // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.
+    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
+                  int parts = kAll) const;
+    bool has_lights() const { return !lights_.empty(); }
+    bool has_sky() const { return sky_.type != Sky::Type::None; }
+    bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.
     double EmittedPower() const;
 

@@ -104,8 +104,8 @@ void AddDefaultRig(Scene& scene, const Vec3d& bmin, const Vec3d& bmax) {
     Vec3d b = Cross(a, dir);
     double h = diag * 0.25;
     PolygonLight key;
-    // Counter-clockwise as seen from the centre (the emitting side faces -dir).
-    key.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
+    // Wound so its front normal a x b = -dir faces the centre.
+    key.vertices = {c - a * h - b * h, c + a * h - b * h, c + a * h + b * h, c - a * h + b * h};
     // Radiance such that the irradiance at the centre is about 3 (key : fill = 3 : 1).
     double solid = (4 * h * h) / ((1.5 * diag) * (1.5 * diag));
     double l = 3.0 / solid;

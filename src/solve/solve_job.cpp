@@ -64,6 +64,9 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                                      stream::TileParts::GeometryImage);
         charts[size_t(c)].geometry = std::move(tile.geometry);
         charts[size_t(c)].scale = tile.meta.scale;
+        int level = 0;
+        while ((1u << level) < tile.meta.resolution) ++level;
+        charts[size_t(c)].max_level = level;
     });
 
     // Small emissive surfaces -> polygon lights.

@@ -61,6 +61,15 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const 
     }
 }
 
+float Solver::RayOffset(uint32_t chart) const {
+    // Shadow rays start half a light-map texel off the surface: shadows of bumps smaller
+    // than a texel cannot be represented by the light map (that detail comes back through
+    // the full-resolution normal at display), and chasing them would refine every node.
+    const SolveChart& sc = charts_[chart];
+    const int level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    return std::max(opt_.ray_offset, float(0.5 * sc.scale / double(1u << level)));
+}
+
 Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {
     return SurfaceAlbedo(scene_.MaterialOf(material), color);
 }
@@ -71,7 +80,8 @@ void Solver::RefineDirect(uint32_t chart) {
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;
     const int finest = sc.geometry.finest_level();
-    DirectLight direct(scene_, vis_, opt_.ray_offset, opt_.scene_size);
+    const int max_level = sc.max_level >= 0 ? sc.max_level : finest;
+    DirectLight direct(scene_, vis_, RayOffset(chart), opt_.scene_size);
     const bool radiosity = opt_.settings.radiosity;
 
     std::vector<ReceiverPoint> pts;
@@ -97,7 +107,7 @@ void Solver::RefineDirect(uint32_t chart) {
             }
         }
         e9.assign(pts.size() * 9, 0.f);
-        if (!direct.empty()) direct.Evaluate(pts, e9);
+        if (direct.has_lights()) direct.Evaluate(pts, e9, DirectLight::kLights);
         vals.assign(pts.size() * size_t(blocks), 0.f);
         for (size_t p = 0; p < pts.size(); ++p) {
             if (!radiosity) {
@@ -123,7 +133,7 @@ void Solver::RefineDirect(uint32_t chart) {
         size_t n = stack.back();
         stack.pop_back();
         QuadNode node = field.node(n);
-        if (int(node.level) < std::min(opt_.min_level, finest)) {
+        if (int(node.level) < std::min(opt_.min_level, max_level)) {
             int32_t first = field.Subdivide(n);
             for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
             continue;
@@ -131,7 +141,7 @@ void Solver::RefineDirect(uint32_t chart) {
         evaluate(node, ng, true);
         float scale = max_abs(vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
-        if (int(node.level) < finest) {
+        if (int(node.level) < max_level) {
             evaluate(node, gc, false);
             scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
             float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
@@ -145,6 +155,55 @@ void Solver::RefineDirect(uint32_t chart) {
         std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
     }
     field.Pull();
+
+    // The sky is smooth lighting sampled by discrete directions: its quadrature steps
+    // are not detail worth refining for. It is gathered at a fixed level (or the leaves
+    // above it) and pushed down, like indirect light.
+    if (!direct.has_sky()) return;
+    const int sky_level = std::min(max_level, opt_.sky_level);
+    std::vector<size_t> targets;
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+        size_t n = stack.back();
+        stack.pop_back();
+        const QuadNode& node = field.node(n);
+        if (node.leaf() || int(node.level) >= sky_level) {
+            targets.push_back(n);
+            continue;
+        }
+        for (int c = 3; c >= 0; --c) stack.push_back(size_t(node.first_child + c));
+    }
+    for (size_t n : targets) {
+        const QuadNode node = field.node(n);
+        pts.clear();
+        albedo.clear();
+        const int gl = std::min(finest, int(node.level) + 2);
+        for (int p = 0; p < ng * ng; ++p) {
+            double s, t, w;
+            GaussPoint2D(ng, p, &s, &t, &w);
+            auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
+            pts.push_back({smp.position, smp.normal, smp.vis_point});
+            albedo.push_back(Albedo(smp.material, smp.color));
+        }
+        e9.assign(pts.size() * 9, 0.f);
+        direct.Evaluate(pts, e9, DirectLight::kSky);
+        vals.assign(pts.size() * size_t(blocks), 0.f);
+        for (size_t p = 0; p < pts.size(); ++p) {
+            if (!radiosity) {
+                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
+                continue;
+            }
+            for (int c = 0; c < 3; ++c) {
+                const float* e = &e9[p * 9 + size_t(3 * c)];
+                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
+                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
+            }
+        }
+        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+        float* pend = field.pending(n);
+        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+    }
+    field.PushPending();
 }
 
 void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
@@ -235,7 +294,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     const int order = field.order(), blocks = field.blocks(), ng = order + 1;
     const int finest = sc.geometry.finest_level();
     const bool radiosity = opt_.settings.radiosity;
-    const float eps = opt_.ray_offset;
+    const float eps = RayOffset(receiver);
     // Links whose irradiance bound is below this are evaluated where they stand.
     const double negligible = 1e-3 * opt_.settings.tolerance * reference_;
 

@@ -30,7 +30,8 @@ class VisibilityScene;
 
 struct SolveChart {
     stream::GeometryImage geometry;
-    double scale = 1;  // 3D length of the unit square's side
+    double scale = 1;   // 3D length of the unit square's side
+    int max_level = -1; // quadtree depth cap (the light-map texel); -1: the geometry's finest
 };
 
 struct SolveOptions {
@@ -38,6 +39,7 @@ struct SolveOptions {
     float ray_offset = 1e-4f;       // absolute; callers add the proxy's deviation
     float scene_size = 1;           // bounding-box diagonal
     int min_level = 2;              // quadtrees start this deep
+    int sky_level = 4;              // the sky is gathered at this level (smooth light)
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
@@ -83,6 +85,7 @@ private:
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
     double UnshotPower(uint32_t chart, bool first_shot) const;
+    float RayOffset(uint32_t chart) const;
 
     const Scene& scene_;
     const std::vector<SolveChart>& charts_;

@@ -61,10 +61,11 @@ TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
     return m;
 }
 
+// The power of two nearest (in log scale) to the texels the chart's square needs.
 uint32_t ResolutionFor(double scale, const ChartBuildOptions& opt) {
     double want = scale / opt.texel_size;
     uint32_t r = opt.min_resolution;
-    while (r < opt.max_resolution && double(r) < want) r *= 2;
+    while (r < opt.max_resolution && double(r) * std::sqrt(2.0) < want) r *= 2;
     return r;
 }
 
@@ -78,7 +79,7 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
     img.levels.resize(size_t(levels) + 1);
     auto& fine = img.levels.back();
     fine.resize(size_t(res) * res);
-    const int k = 4;  // sub-samples per texel side, for coverage and area
+    const int k = 2;  // sub-samples per texel side, for coverage and area
     const double texel_uv = 1.0 / res;
     const double s2 = param.scale * param.scale;
     for (uint32_t j = 0; j < res; ++j) {
@@ -184,13 +185,15 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         int grid_res = DefaultGridResolution(chart.triangles.size());
         tile.grid = BuildChartGrid(tile.uv, tile.triangles, grid_res);
         const uint32_t res = ResolutionFor(param.scale, opt);
-        tile.geometry = SampleGeometry(chart, param, tile.grid, tile.normal, res);
+        tile.geometry = SampleGeometry(chart, param, tile.grid, tile.normal,
+                                       std::min(res, opt.max_geometry_resolution));
 
         ChartMeta& m = tile.meta;
         m.brick = brick;
         m.vertex_count = uint32_t(chart.position.size());
         m.triangle_count = uint32_t(chart.triangles.size());
         m.resolution = res;
+        m.geometry_resolution = tile.geometry.resolution;
         m.grid_resolution = uint32_t(grid_res);
         m.scale = param.scale;
         m.area = param.metrics.area_3d;

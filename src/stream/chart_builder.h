@@ -17,8 +17,11 @@ namespace mebake::stream {
 
 struct ChartBuildOptions {
     double texel_size = 0.01;         // 3D size of a light-map texel
-    uint32_t min_resolution = 4;      // texels per chart side, powers of two
-    uint32_t max_resolution = 1024;
+    uint32_t min_resolution = 4;      // light-map texels per chart side, powers of two
+    uint32_t max_resolution = 2048;
+    // The geometry image the solver samples is at most this fine; the light map itself
+    // is evaluated from the triangles at the chart's full resolution by export.
+    uint32_t max_geometry_resolution = 128;
     double max_distortion = 0.05;     // split charts whose Jacobian deviation is above
     uint32_t max_chart_vertices = 50000;
     size_t cache_bytes = size_t(8) << 20;  // vertex look-ups for this brick

@@ -50,17 +50,18 @@ ChartTile ReadTile(const std::string& path, TileParts parts) {
     if (meta.size() != sizeof(ChartMeta)) CorruptError({path}, "META chunk has the wrong size");
     std::memcpy(&t.meta, meta.data(), sizeof(ChartMeta));
     const auto& m = t.meta;
-    if (m.resolution == 0 || (m.resolution & (m.resolution - 1)) != 0 || m.resolution > 65536 ||
-        !std::isfinite(m.scale) || m.scale <= 0)
-        CorruptError({path}, "META chunk is inconsistent (resolution {}, scale {})", m.resolution,
-                     m.scale);
+    auto pow2 = [](uint32_t x) { return x != 0 && (x & (x - 1)) == 0 && x <= 65536; };
+    if (!pow2(m.resolution) || !pow2(m.geometry_resolution) || !std::isfinite(m.scale) ||
+        m.scale <= 0)
+        CorruptError({path}, "META chunk is inconsistent (resolution {}, geometry {}, scale {})",
+                     m.resolution, m.geometry_resolution, m.scale);
     if (parts != TileParts::Mesh) {
-        t.geometry.resolution = m.resolution;
+        const uint32_t g = m.geometry_resolution;
+        t.geometry.resolution = g;
         int levels = 0;
-        while ((1u << levels) < m.resolution) ++levels;
+        while ((1u << levels) < g) ++levels;
         t.geometry.levels.resize(size_t(levels) + 1);
-        t.geometry.levels.back() =
-            ReadExact<GeometryTexel>(r, Tag("GEO0"), size_t(m.resolution) * m.resolution);
+        t.geometry.levels.back() = ReadExact<GeometryTexel>(r, Tag("GEO0"), size_t(g) * g);
         t.geometry.BuildPyramid();
     }
     if (parts == TileParts::GeometryImage) return t;

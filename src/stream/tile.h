@@ -24,8 +24,10 @@ constexpr uint32_t kTileVersion = 1;
 struct ChartMeta {
     uint32_t chart = 0, brick = 0;
     uint32_t vertex_count = 0, triangle_count = 0;
-    uint32_t resolution = 0;
+    uint32_t resolution = 0;           // light-map texels per side
     uint32_t grid_resolution = 0;
+    uint32_t geometry_resolution = 0;  // geometry image texels per side (<= resolution)
+    uint32_t reserved1 = 0;
     double scale = 0;
     double area = 0;
     double jacobian_deviation = 0;
