@@ -134,7 +134,10 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             // E does not involve the receiver's normal (that is what keeps it smooth on
             // noisy scans): what lies below the surface is removed by visibility alone.
             double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
-            faces[p] = side > 0 || (l.two_sided && side < 0);
+            bool above = Dot(rp.horizon, rp.horizon) == 0;
+            for (const auto& v : l.vertices)
+                above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
+            faces[p] = (side > 0 || (l.two_sided && side < 0)) && above;
             if (!faces[p]) continue;
             Vec3f o = rp.vis_point + rp.normal * offset_;
             for (const auto& c : l.classify) batch.AddSegment(o, c);
@@ -163,17 +166,23 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
         };
+        // The closed form of a polygon above the point's horizon.
+        auto above = [&](std::span<const Vec3d> poly, size_t p) {
+            const Vec3d x(points[p].position), h(points[p].horizon);
+            if (Dot(h, h) == 0) return VectorIrradiance(poly, 1.0, x, emission);
+            auto clipped = ClipToHalfSpace(poly, x, h);
+            return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
+        };
         at = 0;
         for (size_t p : penumbra) {
-            const Vec3d x(points[p].position);
             Vec3d e{};
             for (size_t k = 0; k < l.cells.size(); ++k)
-                if (!batch.occluded[at++]) e += VectorIrradiance(l.cells[k], 1.0, x, emission);
+                if (!batch.occluded[at++]) e += above(l.cells[k], p);
             add(p, e);
         }
         // 3. Fully lit points: the closed form.
         for (size_t p = 0; p < points.size(); ++p)
-            if (fraction[p] > 0) add(p, VectorIrradiance(l.vertices, 1.0, Vec3d(points[p].position), emission));
+            if (fraction[p] > 0) add(p, above(l.vertices, p));
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {
@@ -188,9 +197,15 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
         for (const auto& rp : points) {
             const Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& w : dirs) batch.Add(o, w, far_);
+            for (const auto& w : dirs) {
+                // Below the horizon: no ray, counted as blocked (tfar 0 never hits).
+                bool below = Dot(w, rp.horizon) < 0;
+                batch.Add(o, w, below ? -1.f : far_);
+            }
         }
         batch.Trace(vis_);
+        for (size_t k = 0; k < batch.size(); ++k)
+            if (batch.segments[k].tfar < 0) batch.occluded[k] = 1;
         // Estimator of E = integral of L(w) V w dw with pdf cos/pi: sum L w pi / (cos N).
         const float scale = float(std::numbers::pi) / float(sky_dirs_.size());
         size_t at = 0;

@@ -18,8 +18,12 @@ class VisibilityScene;
 
 struct ReceiverPoint {
     Vec3f position;   // where the field is evaluated
-    Vec3f normal;     // receiver normal there (only its upper hemisphere contributes)
+    Vec3f normal;     // surface normal there (offsets shadow rays)
     Vec3f vis_point;  // where visibility is evaluated (nearest real point)
+    // The horizon: light below the plane through the point with this normal is cut off
+    // in closed form. Callers pass a smooth normal (the quadtree node's), not the scan's
+    // noisy per-point one, so E stays smooth; zero means no horizon (visibility only).
+    Vec3f horizon{};
 };
 
 class DirectLight {

@@ -44,7 +44,7 @@ struct SolverSettings {
     double stop_fraction = 1e-3;  // stop when unshot power < this x emitted power
     double time_limit = 0;        // seconds; 0 = none
     int sky_directions = 128;     // visibility directions per receiver point for the sky
-    int light_samples = 256;      // visibility samples per receiver point in penumbrae
+    int light_samples = 64;       // visibility samples per receiver point in penumbrae
     bool radiosity = false;       // solve for B instead of E (for comparison, seed Table 1)
 };
 

@@ -61,6 +61,12 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const 
     }
 }
 
+Vec3f Solver::NodeNormal(const SolveChart& sc, const QuadNode& node) {
+    const int l = std::min(int(node.level), sc.geometry.finest_level());
+    const uint32_t shift = uint32_t(int(node.level) - l);
+    return sc.geometry.At(l, node.i >> shift, node.j >> shift).normal;
+}
+
 float Solver::RayOffset(uint32_t chart) const {
     // Shadow rays start half a light-map texel off the surface: shadows of bumps smaller
     // than a texel cannot be represented by the light map (that detail comes back through
@@ -92,6 +98,7 @@ void Solver::RefineDirect(uint32_t chart) {
         pts.clear();
         albedo.clear();
         const int gl = std::min(finest, int(node.level) + 2);
+        const Vec3f horizon = NodeNormal(sc, node);
         for (int c = 0; c < grid; ++c) {
             for (int a = 0; a < grid; ++a) {
                 double s, t, w;
@@ -102,7 +109,7 @@ void Solver::RefineDirect(uint32_t chart) {
                     t = ControlPoint(grid, c);
                 }
                 auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-                pts.push_back({smp.position, smp.normal, smp.vis_point});
+                pts.push_back({smp.position, smp.normal, smp.vis_point, horizon});
                 albedo.push_back(Albedo(smp.material, smp.color));
             }
         }
@@ -145,7 +152,8 @@ void Solver::RefineDirect(uint32_t chart) {
             evaluate(node, gc, false);
             scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
             float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
-            if (err > float(opt_.settings.tolerance) * scale) {
+            if (err > float(opt_.settings.tolerance) * scale &&
+                field.node_count() + 4 <= opt_.max_nodes_per_chart) {
                 int32_t first = field.Subdivide(n);
                 for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
                 continue;
@@ -155,6 +163,8 @@ void Solver::RefineDirect(uint32_t chart) {
         std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
     }
     field.Pull();
+    spdlog::debug("chart {}: direct light refined to {} nodes (depth cap {})", chart,
+                  field.node_count(), max_level);
 
     // The sky is smooth lighting sampled by discrete directions: its quadrature steps
     // are not detail worth refining for. It is gathered at a fixed level (or the leaves
@@ -178,11 +188,12 @@ void Solver::RefineDirect(uint32_t chart) {
         pts.clear();
         albedo.clear();
         const int gl = std::min(finest, int(node.level) + 2);
+        const Vec3f horizon = NodeNormal(sc, node);
         for (int p = 0; p < ng * ng; ++p) {
             double s, t, w;
             GaussPoint2D(ng, p, &s, &t, &w);
             auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-            pts.push_back({smp.position, smp.normal, smp.vis_point});
+            pts.push_back({smp.position, smp.normal, smp.vis_point, horizon});
             albedo.push_back(Albedo(smp.material, smp.color));
         }
         e9.assign(pts.size() * 9, 0.f);

@@ -40,6 +40,7 @@ struct SolveOptions {
     float scene_size = 1;           // bounding-box diagonal
     int min_level = 2;              // quadtrees start this deep
     int sky_level = 4;              // the sky is gathered at this level (smooth light)
+    size_t max_nodes_per_chart = 8192;  // refinement budget per chart
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
@@ -86,6 +87,7 @@ private:
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
+    static Vec3f NodeNormal(const SolveChart& sc, const QuadNode& node);
 
     const Scene& scene_;
     const std::vector<SolveChart>& charts_;

@@ -111,6 +111,7 @@ TEST(Solver, UnoccludedSquareLightMatchesLambert) {
     SolveOptions opt;
     opt.settings.tolerance = 1e-3;
     opt.settings.max_bounces = 0;
+    opt.max_nodes_per_chart = 1u << 20;
     Solver solver(ts.scene, ts.charts, ts.vis, opt);
     solver.Run();
     uint64_t state = 12345;
@@ -293,6 +294,8 @@ TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
     SolveOptions opt;
     opt.settings.max_bounces = 0;
     opt.settings.tolerance = 2e-3;
+    opt.settings.light_samples = 256;
+    opt.max_nodes_per_chart = 1u << 20;
     Solver solver(ts.scene, ts.charts, ts.vis, opt);
     solver.Run();
     auto at = [&](double x, double z) {
