@@ -42,10 +42,10 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
     return out;
 }
 
-DirectLight::DirectLight(const Scene& scene, const VisibilityScene& vis, float ray_offset,
-                         float scene_size)
+DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
+                         const VisibilityScene& vis, float ray_offset, float scene_size)
     : vis_(vis), sky_(scene.sky), offset_(ray_offset), far_(scene_size * 100) {
-    const int per_tri = std::max(2, int(std::lround(std::sqrt(double(scene.solver.light_samples)))));
+    const int per_tri = std::max(2, int(std::lround(std::sqrt(double(settings.light_samples)))));
     for (const auto& pl : scene.lights) {
         Light l;
         l.vertices = pl.vertices;
@@ -86,7 +86,7 @@ DirectLight::DirectLight(const Scene& scene, const VisibilityScene& vis, float r
     if (sky_.type != Sky::Type::None) {
         // Cosine-weighted directions: Shirley-Chiu concentric map of a k x k grid, lifted
         // to the hemisphere (Malley's method).
-        int k = std::max(2, int(std::lround(std::sqrt(double(scene.solver.sky_directions)))));
+        int k = std::max(2, int(std::lround(std::sqrt(double(settings.sky_directions)))));
         for (int a = 0; a < k; ++a) {
             for (int b = 0; b < k; ++b) {
                 double x = 2 * (a + 0.5) / k - 1, y = 2 * (b + 0.5) / k - 1, r, phi;

@@ -28,7 +28,9 @@ struct ReceiverPoint {
 
 class DirectLight {
 public:
-    DirectLight(const Scene& scene, const VisibilityScene& vis, float ray_offset, float scene_size);
+    // Sampling counts come from `settings` (light_samples, sky_directions).
+    DirectLight(const Scene& scene, const SolverSettings& settings, const VisibilityScene& vis,
+                float ray_offset, float scene_size);
 
     enum Parts { kLights = 1, kSky = 2, kAll = 3 };
     // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.

@@ -40,7 +40,7 @@ struct OccluderScene {
 
 TEST(DirectLight, PenumbraCloseToExact) {
     OccluderScene s(256);
-    DirectLight direct(s.scene, s.vis, 1e-4f, 10);
+    DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
     std::vector<ReceiverPoint> pts;
     for (double x = 0; x <= 2; x += 0.05) pts.push_back({Vec3f(float(x), 0, 0.1f), {0, 1, 0}, Vec3f(float(x), 0, 0.1f)});
     std::vector<float> e(pts.size() * 9);
@@ -63,7 +63,7 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
     std::vector<uint32_t> tri = {0, 1, 2};
     vis.AddTriangles(far, tri, "far");
     vis.Commit();
-    DirectLight direct(scene, vis, 1e-4f, 10);
+    DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
     std::vector<ReceiverPoint> pts = {{{0, 0, 0}, {0, 1, 0}, {0, 0, 0}}};
     std::vector<float> e(9);
     direct.Evaluate(pts, e);
