@@ -46,6 +46,12 @@ std::vector<uint32_t> ChartResolutions(const BakeView& view) {
     return res;
 }
 
+std::vector<uint32_t> AllCharts(const BakeView& view) {
+    std::vector<uint32_t> all(view.chart_count());
+    for (size_t c = 0; c < all.size(); ++c) all[c] = uint32_t(c);
+    return all;
+}
+
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
     : tile_(tile), field_(field), radiosity_(radiosity_unknown), scene_(scene) {

@@ -11,9 +11,12 @@
 // point is, so texels that straddle the chart's outline filter smoothly.
 #pragma once
 
+#include <algorithm>
 #include <span>
 #include <string>
+#include <vector>
 
+#include "core/parallel.h"
 #include "core/vec.h"
 #include "solve/field.h"
 #include "solve/scene.h"
@@ -41,6 +44,33 @@ BakeView OpenBakeView(const std::string& dir);
 
 // The resolution of every chart from the manifest, validated (Error(Corrupt) otherwise).
 std::vector<uint32_t> ChartResolutions(const BakeView& view);
+
+// Reads the tiles of `charts` in parallel batches; for each, prepare(chart, tile) runs in
+// parallel and returns a result, then consume(chart, tile, result) runs on the calling
+// thread in the order of `charts` — so whatever consume accumulates is deterministic.
+// Memory: one batch of tiles (`batch` tiles; 0 = 2 per worker thread).
+template <typename Prepare, typename Consume>
+void ForEachTile(const BakeView& view, std::span<const uint32_t> charts, stream::TileParts parts,
+                 Prepare&& prepare, Consume&& consume, size_t batch = 0) {
+    using Result = decltype(prepare(uint32_t(0), std::declval<stream::ChartTile&>()));
+    if (batch == 0) batch = size_t(std::max(1, 2 * MaxThreads()));
+    std::vector<stream::ChartTile> tiles;
+    std::vector<Result> results;
+    for (size_t first = 0; first < charts.size(); first += batch) {
+        const size_t n = std::min(batch, charts.size() - first);
+        tiles.assign(n, {});
+        results.assign(n, Result{});
+        ParallelFor(0, int64_t(n), [&](int64_t k) {
+            const uint32_t c = charts[first + size_t(k)];
+            tiles[size_t(k)] = stream::ReadTile(view.TilePath(c), parts);
+            results[size_t(k)] = prepare(c, tiles[size_t(k)]);
+        });
+        for (size_t k = 0; k < n; ++k) consume(charts[first + k], tiles[k], results[k]);
+    }
+}
+
+// 0, 1, ..., chart_count - 1.
+std::vector<uint32_t> AllCharts(const BakeView& view);
 
 // What shading needs at a surface point of a chart.
 struct ShadingPoint {
