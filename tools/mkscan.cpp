@@ -85,6 +85,12 @@ double Signed(uint64_t h) {
     return 2.0 * Unit(h) - 1.0;
 }
 
+// floor() without the libm call baseline x86-64 makes (exact for |x| < 2^63).
+int64_t Floor(double x) {
+    int64_t i = int64_t(x);
+    return double(i) > x ? i - 1 : i;
+}
+
 double Smooth(double t) {
     return t * t * (3.0 - 2.0 * t);
 }
@@ -92,57 +98,78 @@ double Lerp(double a, double b, double t) {
     return a + (b - a) * t;
 }
 
-// Lattice values are hashed from signed cell coordinates (two's complement, so negative
-// coordinates hash fine).
-double Lattice3(uint64_t seed, int64_t x, int64_t y, int64_t z) {
-    return Signed(Hash1(seed, uint64_t(x), uint64_t(y), uint64_t(z)));
-}
-
-double ValueNoise3(uint64_t seed, double x, double y, double z) {
-    double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
-    int64_t ix = int64_t(fx), iy = int64_t(fy), iz = int64_t(fz);
-    double tx = Smooth(x - fx), ty = Smooth(y - fy), tz = Smooth(z - fz);
-    double c00 = Lerp(Lattice3(seed, ix, iy, iz), Lattice3(seed, ix + 1, iy, iz), tx);
-    double c10 = Lerp(Lattice3(seed, ix, iy + 1, iz), Lattice3(seed, ix + 1, iy + 1, iz), tx);
-    double c01 = Lerp(Lattice3(seed, ix, iy, iz + 1), Lattice3(seed, ix + 1, iy, iz + 1), tx);
-    double c11 =
-        Lerp(Lattice3(seed, ix, iy + 1, iz + 1), Lattice3(seed, ix + 1, iy + 1, iz + 1), tx);
-    return Lerp(Lerp(c00, c10, ty), Lerp(c01, c11, ty), tz);
-}
-
-double ValueNoise2(uint64_t seed, double x, double y) {
-    double fx = std::floor(x), fy = std::floor(y);
-    int64_t ix = int64_t(fx), iy = int64_t(fy);
-    double tx = Smooth(x - fx), ty = Smooth(y - fy);
-    double c0 = Lerp(Lattice3(seed, ix, iy, 0), Lattice3(seed, ix + 1, iy, 0), tx);
-    double c1 = Lerp(Lattice3(seed, ix, iy + 1, 0), Lattice3(seed, ix + 1, iy + 1, 0), tx);
-    return Lerp(c0, c1, ty);
-}
-
-// Fractional Brownian motion: octaves of doubling frequency and halving amplitude,
-// normalised to about [-1, 1].
-double Fbm3(uint64_t seed, Vec3d p, int octaves) {
-    double sum = 0, amp = 1, norm = 0;
-    for (int o = 0; o < octaves; ++o) {
-        sum += amp * ValueNoise3(seed + uint64_t(o), p.x, p.y, p.z);
-        norm += amp;
-        amp *= 0.5;
-        p = p * 2.03;  // not exactly 2, so octave lattices do not align
+// Value noise over Perlin's permutation-table lattice (Perlin 2002, "Improving noise":
+// a shuffled 256-entry table indexed by the wrapped cell coordinates), with a random
+// value per table entry. Table look-ups instead of a hash per lattice corner make it
+// several times faster; the 256-cell period is far beyond the frequencies used here.
+class Noise {
+public:
+    explicit Noise(uint64_t seed) {
+        for (int i = 0; i < 256; ++i)
+            perm_[i] = uint16_t(i);
+        for (int i = 255; i > 0; --i)
+            std::swap(perm_[i], perm_[Hash(seed, 0x9e12, uint64_t(i)) % uint64_t(i + 1)]);
+        for (int i = 0; i < 256; ++i) {
+            perm_[256 + i] = perm_[i];
+            value_[i] = Signed(Hash(seed, 0x7a1, uint64_t(i)));
+        }
     }
-    return sum / norm;
-}
 
-double Fbm2(uint64_t seed, double x, double y, int octaves) {
-    double sum = 0, amp = 1, norm = 0;
-    for (int o = 0; o < octaves; ++o) {
-        sum += amp * ValueNoise2(seed + uint64_t(o), x, y);
-        norm += amp;
-        amp *= 0.5;
-        x *= 2.03;
-        y *= 2.03;
+    double Value3(double x, double y, double z) const {
+        int64_t fx = Floor(x), fy = Floor(y), fz = Floor(z);
+        // Two's complement wrap: only the low 8 bits matter.
+        unsigned ix = unsigned(fx) & 255, iy = unsigned(fy) & 255, iz = unsigned(fz) & 255;
+        double tx = Smooth(x - double(fx)), ty = Smooth(y - double(fy)),
+               tz = Smooth(z - double(fz));
+        unsigned a = perm_[ix] + iy, b = perm_[ix + 1] + iy;
+        unsigned aa = perm_[a] + iz, ab = perm_[a + 1] + iz;
+        unsigned ba = perm_[b] + iz, bb = perm_[b + 1] + iz;
+        double c00 = Lerp(value_[perm_[aa]], value_[perm_[ba]], tx);
+        double c10 = Lerp(value_[perm_[ab]], value_[perm_[bb]], tx);
+        double c01 = Lerp(value_[perm_[aa + 1]], value_[perm_[ba + 1]], tx);
+        double c11 = Lerp(value_[perm_[ab + 1]], value_[perm_[bb + 1]], tx);
+        return Lerp(Lerp(c00, c10, ty), Lerp(c01, c11, ty), tz);
     }
-    return sum / norm;
-}
+
+    double Value2(double x, double y) const {
+        int64_t fx = Floor(x), fy = Floor(y);
+        unsigned ix = unsigned(fx) & 255, iy = unsigned(fy) & 255;
+        double tx = Smooth(x - double(fx)), ty = Smooth(y - double(fy));
+        unsigned a = perm_[ix] + iy, b = perm_[ix + 1] + iy;
+        double c0 = Lerp(value_[perm_[a]], value_[perm_[b]], tx);
+        double c1 = Lerp(value_[perm_[a + 1]], value_[perm_[b + 1]], tx);
+        return Lerp(c0, c1, ty);
+    }
+
+    // Fractional Brownian motion: octaves of doubling frequency and halving amplitude,
+    // each shifted so their lattices do not align; normalised to about [-1, 1].
+    double Fbm3(Vec3d p, int octaves) const {
+        double sum = 0, amp = 1, norm = 0;
+        for (int o = 0; o < octaves; ++o) {
+            sum += amp * Value3(p.x, p.y, p.z);
+            norm += amp;
+            amp *= 0.5;
+            p = p * 2.03 + Vec3d(17.31, 41.57, 73.19);
+        }
+        return sum / norm;
+    }
+
+    double Fbm2(double x, double y, int octaves) const {
+        double sum = 0, amp = 1, norm = 0;
+        for (int o = 0; o < octaves; ++o) {
+            sum += amp * Value2(x, y);
+            norm += amp;
+            amp *= 0.5;
+            x = x * 2.03 + 17.31;
+            y = y * 2.03 + 41.57;
+        }
+        return sum / norm;
+    }
+
+private:
+    uint16_t perm_[512];
+    double value_[256];
+};
 
 struct Rgb {
     uint8_t r = 0, g = 0, b = 0;
@@ -189,7 +216,15 @@ class BoxSphere {
 public:
     BoxSphere(int64_t a, int64_t b, int64_t c, Vec3d center, double radius, double noise,
               uint64_t seed)
-        : a_(a), b_(b), c_(c), center_(center), radius_(radius), noise_(noise), seed_(seed) {
+        : a_(a),
+          b_(b),
+          c_(c),
+          center_(center),
+          radius_(radius),
+          noise_(noise),
+          seed_(seed),
+          shape_(Hash(seed, 0x5a9e)),
+          color_(Hash(seed, 0xc010)) {
         slice_ = (a + 1) * (b + 1);
         ring_ = 2 * (a + b);
         cell_ = 2.0 * radius / double(std::max({a, b, c}));
@@ -262,7 +297,7 @@ public:
         d = d / len;
         double disp = 0;
         if (noise_ > 0) {
-            disp = noise_ * Fbm3(seed_, d * 1.6 + Vec3d(11.5, 7.25, 3.125), 6);
+            disp = noise_ * shape_.Fbm3(d * 1.6 + Vec3d(11.5, 7.25, 3.125), 6);
             disp += noise_ * 0.08 * cell_ / radius_ *
                     Signed(Hash1(seed_, 0x6a17, v));  // scanner jitter
         }
@@ -273,7 +308,7 @@ public:
         Vec3d p = pos - center_;
         Vec3d d = p / std::sqrt(Dot(p, p));
         static constexpr double kGrey[3] = {118, 112, 106}, kOchre[3] = {176, 142, 96};
-        double t = 0.5 + 0.9 * Fbm3(seed_ + 101, d * 3.0, 4);
+        double t = 0.5 + 0.9 * color_.Fbm3(d * 3.0, 4);
         Rgb c = Blend(kGrey, kOchre, t);
         // Darker in hollows: radius below the mean.
         double shade = std::clamp(0.75 + 2.0 * (std::sqrt(Dot(p, p)) / radius_ - 1.0), 0.45, 1.1);
@@ -351,6 +386,7 @@ private:
     Vec3d center_;
     double radius_, noise_;
     uint64_t seed_;
+    Noise shape_, color_;  // displacement, colour variation
     int64_t slice_, ring_;
     double cell_;
 };
@@ -360,9 +396,22 @@ private:
 class Terrain {
 public:
     Terrain(int64_t w, int64_t h, Vec3d origin, double size, double noise, uint64_t seed)
-        : w_(w), h_(h), origin_(origin), noise_(noise), seed_(seed) {
+        : w_(w),
+          h_(h),
+          origin_(origin),
+          noise_(noise),
+          seed_(seed),
+          shape_(Hash(seed, 0x5a9e)),
+          color_(Hash(seed, 0xc010)) {
         cell_ = size / double(std::max(w, h));
         size_ = size;
+        // Octaves finer than a few cells would only alias into jagged noise: stop where
+        // a noise period (starting at a third of the tile, 2.03x finer each octave)
+        // would span fewer than 3 cells.
+        octaves_ = 2;
+        double period_cells = double(std::max(w, h)) / 3.0;
+        while (octaves_ < 7 && period_cells / std::pow(2.03, octaves_) >= 3.0)
+            ++octaves_;
     }
     uint64_t VertexCount() const { return uint64_t((w_ + 1) * (h_ + 1)); }
     uint64_t QuadCount() const { return uint64_t(w_ * h_); }
@@ -387,7 +436,7 @@ public:
         double t = (p.z - origin_.z) / (noise_ > 0 ? noise_ * size_ : 1.0);  // about [-1,1]
         static constexpr double kGrass[3] = {64, 112, 52}, kSoil[3] = {136, 112, 78},
                                 kRock[3] = {150, 146, 140}, kSnow[3] = {236, 238, 242};
-        double wobble = 0.15 * Fbm2(seed_ + 202, p.x * 9.0 / size_, p.y * 9.0 / size_, 3);
+        double wobble = 0.15 * color_.Fbm2(p.x * 9.0 / size_, p.y * 9.0 / size_, 3);
         t += wobble;
         if (t < -0.1)
             return Blend(kGrass, kSoil, (t + 0.6) / 0.5);
@@ -401,7 +450,7 @@ private:
         if (noise_ <= 0)
             return 0;
         double f = 3.0 / size_;
-        double base = Fbm2(seed_, x * f, y * f, 7);
+        double base = shape_.Fbm2(x * f, y * f, octaves_);
         return noise_ * size_ * base;
     }
     double Jitter(uint64_t v) const {
@@ -409,9 +458,11 @@ private:
     }
 
     int64_t w_, h_;
+    int octaves_;
     Vec3d origin_;
     double noise_;
     uint64_t seed_;
+    Noise shape_, color_;  // displacement, colour variation
     double cell_, size_;
 };
 
@@ -603,7 +654,12 @@ template <typename Surface>
 void PlanDefects(Component<Surface>& comp, uint64_t holes, uint64_t fins) {
     const Surface& s = comp.surface;
     uint64_t quads = s.QuadCount();
+    // Hole radius: 1% of the grid width, at least 1.5 cells (a 3-cell-wide disk).
     double radius = std::max(1.5, double(s.Width()) / 100.0);
+    uint64_t disk = uint64_t(std::ceil(3.2 * radius * radius));  // a little over pi r^2
+    if (holes > 0 && holes > quads / disk)
+        mebake::UsageError("{} holes of ~{} quads each would cover all {} quads of a component",
+                           holes, disk, quads);
     for (uint64_t k = 0; k < holes; ++k)
         s.Cells(Hash(comp.seed, 0x401e, k) % quads, radius, comp.hole_quads);
     std::sort(comp.hole_quads.begin(), comp.hole_quads.end());
@@ -804,6 +860,12 @@ std::unique_ptr<OutputStream> OpenOutput(const std::string& path) {
             mebake::IoError({path}, "dup2: {}", mebake::ErrnoString(errno));
         ::close(fd);
         return OutputStream::Open("-");
+    }
+    if (path == "-") {
+        // A larger pipe buffer means fewer context switches with the reader (best effort;
+        // Linux caps it at /proc/sys/fs/pipe-max-size).
+        if (::fstat(1, &st) == 0 && S_ISFIFO(st.st_mode))
+            ::fcntl(1, F_SETPIPE_SZ, 1 << 20);
     }
     return OutputStream::Open(path);
 }

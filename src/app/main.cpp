@@ -88,15 +88,15 @@ int main(int argc, char** argv) {
     ing_cmd->add_option("-o,--output", ing.output, "Bake directory to write (e.g. scene.mebake)")
         ->required();
     ing_cmd->add_option("--format", ing_format, "Format of stdin")->check(kFormatName);
-    ing_cmd->add_option("--memory", ing.memory, "Memory budget (e.g. 512M, 2G)", true);
-    ing_cmd->add_option("--threads", ing.threads, "Worker threads (0: all cores)", true);
+    ing_cmd->add_option("--memory", ing.memory, "Memory budget (e.g. 512M, 2G)")->capture_default_str();
+    ing_cmd->add_option("--threads", ing.threads, "Worker threads (0: all cores)")->capture_default_str();
     auto* texel = ing_cmd->add_option("--texel-size", ing.texel_size,
                                       "Light-map texel size in scene units (default: from --lightmap-resolution)");
     ing_cmd->add_option("--lightmap-resolution", ing.lightmap_resolution,
-                        "Atlas side the default texel size aims at", true)
+                        "Atlas side the default texel size aims at")->capture_default_str()
         ->excludes(texel);
     ing_cmd->add_option("--max-distortion", ing.max_distortion,
-                        "Jacobian (area) deviation above which a chart is split", true)
+                        "Jacobian (area) deviation above which a chart is split")->capture_default_str()
         ->check(CLI::Range(0.001, 1.0));
     ing_cmd->add_flag("-f,--force", ing.force, "Replace an existing bake directory");
 
@@ -112,9 +112,9 @@ int main(int argc, char** argv) {
     sol_cmd->add_option("--tolerance", sol.tolerance, "Relative error that triggers subdivision (default 0.02)");
     sol_cmd->add_option("--max-bounces", sol.max_bounces, "Shooting batches after the direct pass (default 16)");
     sol_cmd->add_option("--time-limit", sol.time_limit, "Stop shooting after this many seconds");
-    sol_cmd->add_option("--threads", sol.threads, "Worker threads (0: all cores)", true);
-    sol_cmd->add_option("--memory", sol.memory, "Memory budget (e.g. 512M, 2G)", true);
-    sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity", true)
+    sol_cmd->add_option("--threads", sol.threads, "Worker threads (0: all cores)")->capture_default_str();
+    sol_cmd->add_option("--memory", sol.memory, "Memory budget (e.g. 512M, 2G)")->capture_default_str();
+    sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity")->capture_default_str()
         ->check(CLI::IsMember({"irradiance", "radiosity"}));
     sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
 

@@ -129,6 +129,13 @@ std::unique_ptr<OutputStream> OutputStream::Open(const std::string& path) {
     if (path == "-") {
         s->name_ = "<stdout>";
         s->fd_ = 1;
+    } else if (struct stat st {}; ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+        // A device, FIFO or socket (/dev/null, a named pipe): write to it directly. The
+        // temporary-and-rename path would replace the device with a regular file.
+        if (S_ISDIR(st.st_mode)) IoError({path}, "is a directory, expected an output file");
+        s->name_ = path;
+        s->fd_ = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+        if (s->fd_ < 0) IoError({path}, "cannot open for writing: {}", ErrnoString(errno));
     } else {
         s->name_ = path;
         std::filesystem::path p(path);
@@ -200,7 +207,7 @@ void OutputStream::Commit() {
         committed_ = true;
         return;
     }
-    if (fd_ == 1) {
+    if (fd_ == 1 || temp_.empty()) {
         committed_ = true;
         return;
     }

@@ -26,6 +26,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/log.h"
 
 #include <algorithm>
 #include <array>
@@ -45,8 +46,8 @@
 namespace mebake::io {
 namespace {
 
-constexpr int kBlockShift = 12;
-constexpr uint64_t kBlockVertices = uint64_t(1) << kBlockShift;  // 48 KiB of positions
+constexpr int kBlockShift = 10;
+constexpr uint64_t kBlockVertices = uint64_t(1) << kBlockShift;  // 12 KiB of positions
 constexpr uint64_t kBlockMask = kBlockVertices - 1;
 constexpr size_t kBlockBytes = kBlockVertices * sizeof(Vec3f);
 
@@ -186,11 +187,13 @@ public:
             }
             file_.ReadAt(iov.data(), int(n), b * kBlockBytes);
             reads_ += 1;
+            blocks_read_ += n;
             i += n;
         }
     }
 
-    uint64_t reads() const { return reads_; }
+    uint64_t reads() const { return reads_; }  // preadv calls
+    uint64_t blocks_read() const { return blocks_read_; }
 
 private:
     struct Tlb {
@@ -219,6 +222,7 @@ private:
         struct iovec iov = {slots_[slot].get(), kBlockBytes};
         file_.ReadAt(&iov, 1, b * kBlockBytes);
         reads_ += 1;
+        blocks_read_ += 1;
         return slot;
     }
 
@@ -274,7 +278,7 @@ private:
     std::array<Tlb, kTlb> tlb_;
     uint32_t hand_ = 0;
     uint64_t stamp_ = 0;
-    uint64_t reads_ = 0;
+    uint64_t reads_ = 0, blocks_read_ = 0;
 };
 
 // Faces whose area must wait for vertices that have not arrived: appended as
@@ -463,10 +467,16 @@ void MeshStatsSink::Faces(const FaceBatch& batch) {
     // The spilled blocks this batch reads, so they load in runs before the loop below.
     m.blocks.clear();
     const uint64_t tail_block = have >> kBlockShift;
+    uint64_t recent[4] = {~uint64_t(0), ~uint64_t(0), ~uint64_t(0), ~uint64_t(0)};
     for (uint64_t v : batch.index) {
         uint64_t b = v >> kBlockShift;
-        if (v < have && b != tail_block && (m.blocks.empty() || m.blocks.back() != b))
-            m.blocks.push_back(b);
+        // Faces alternate among a few blocks (neighbouring rows): skip recent repeats
+        // so the sort below stays small.
+        if (v >= have || b == tail_block || b == recent[0] || b == recent[1] || b == recent[2] ||
+            b == recent[3])
+            continue;
+        recent[m.blocks.size() % 4] = b;
+        m.blocks.push_back(b);
     }
     std::sort(m.blocks.begin(), m.blocks.end());
     m.blocks.erase(std::unique(m.blocks.begin(), m.blocks.end()), m.blocks.end());
@@ -537,6 +547,14 @@ void MeshStatsSink::End(const MeshSummary& summary) {
     stats_.surface_area = m.area + m.area_comp;
     stats_.read_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - m.start).count();
+    const uint64_t spilled = have >> kBlockShift;
+    spdlog::debug("info: {} position blocks spilled, {} read back in {} reads", spilled,
+                  m.positions.blocks_read(), m.positions.reads());
+    if (m.positions.blocks_read() > std::max<uint64_t>(100000, 20 * spilled))
+        spdlog::warn(
+            "{}: faces name vertices far apart in the file: face areas re-read {} position "
+            "blocks ({} spilled); a larger cache would be faster",
+            stats_.header.source, m.positions.blocks_read(), spilled);
     impl_->pass.reset();  // closes and so frees the temporary files
 }
 

@@ -12,27 +12,6 @@
 
 namespace mebake::io {
 
-double PlyTypeMax(PlyType t) {
-    switch (t) {
-    case PlyType::Int8:
-        return 127.0;
-    case PlyType::UInt8:
-        return 255.0;
-    case PlyType::Int16:
-        return 32767.0;
-    case PlyType::UInt16:
-        return 65535.0;
-    case PlyType::Int32:
-        return 2147483647.0;
-    case PlyType::UInt32:
-        return 4294967295.0;
-    case PlyType::Float32:
-    case PlyType::Float64:
-        return 1.0;
-    }
-    return 1.0;
-}
-
 std::optional<PlyType> ParsePlyType(std::string_view n) {
     if (n == "char" || n == "int8")
         return PlyType::Int8;

@@ -23,11 +23,17 @@ constexpr uint32_t PlyTypeSize(PlyType t) {
 constexpr bool PlyTypeIsInteger(PlyType t) {
     return t != PlyType::Float32 && t != PlyType::Float64;
 }
-constexpr bool PlyTypeIsSigned(PlyType t) {
-    return t == PlyType::Int8 || t == PlyType::Int16 || t == PlyType::Int32 || !PlyTypeIsInteger(t);
+// The largest value of an integer type (maps integer colours to [0,1]); 1 for floats.
+constexpr double PlyTypeMax(PlyType t) {
+    constexpr double kMax[] = {127.0,        255.0,        32767.0, 65535.0,
+                               2147483647.0, 4294967295.0, 1.0,     1.0};
+    return kMax[int(t)];
 }
-// The largest value of an integer type (used to map integer colours to [0,1]).
-double PlyTypeMax(PlyType t);
+// The smallest value of an integer type; 0 for floats.
+constexpr double PlyTypeMin(PlyType t) {
+    constexpr double kMin[] = {-128.0, 0.0, -32768.0, 0.0, -2147483648.0, 0.0, 0.0, 0.0};
+    return kMin[int(t)];
+}
 // "char", "uchar", ... and their sized aliases; nullopt for anything else.
 std::optional<PlyType> ParsePlyType(std::string_view name);
 

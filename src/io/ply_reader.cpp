@@ -33,7 +33,7 @@ constexpr size_t kMaxFixedStride = size_t(1) << 16;  // larger records use the g
 constexpr size_t kChunkBytes = size_t(1) << 18;      // bytes decoded per fixed-stride step
 constexpr size_t kMaxToken = 4096;                   // longest ASCII token accepted
 
-// What a property is for. Vertex scalars index VertexValues::v.
+// What a property is for. The value roles (kX .. kV) index the per-record value array.
 enum Role : uint8_t {
     kX,
     kY,
@@ -193,12 +193,34 @@ public:
           vertex_count_(vcount),
           batch_vertices_(std::max<size_t>(opt.batch_vertices, 1)),
           batch_faces_(std::max<size_t>(opt.batch_faces, 1)),
-          batch_corners_(std::max<size_t>(batch_faces_ * 4, 64)) {}
+          batch_corners_(batch_faces_ > (size_t(1) << 40) ? batch_faces_ : batch_faces_ * 4) {}
+
+    // Sizes the batches once so they do not grow by reallocation, which costs more than
+    // the decoding on small files. Bounded by the options and kMaxReserve, never by what
+    // the header claims.
+    void Reserve(uint64_t vertices, uint64_t faces, bool normals, bool colors, bool alpha,
+                 bool uvs) {
+        constexpr uint64_t kMaxReserve = uint64_t(1) << 20;
+        const size_t nv = size_t(std::min<uint64_t>({vertices, batch_vertices_, kMaxReserve}));
+        const size_t nf = size_t(std::min<uint64_t>({faces, batch_faces_, kMaxReserve}));
+        vb.position.reserve(nv);
+        if (normals)
+            vb.normal.reserve(nv);
+        if (colors)
+            vb.color.reserve(nv);
+        if (alpha)
+            vb.alpha.reserve(nv);
+        if (uvs)
+            vb.uv.reserve(nv);
+        fb.size.reserve(nf);
+        fb.index.reserve(3 * nf + 2);
+    }
 
     VertexBatch vb;
     FaceBatch fb;
 
     size_t VertexRoom() const { return batch_vertices_ - vb.size(); }
+    size_t FaceRoom() const { return batch_faces_ - fb.count(); }
     void VerticesAdded() {
         if (vb.size() >= batch_vertices_)
             FlushVertices();
@@ -228,11 +250,12 @@ public:
     uint64_t faces_delivered() const { return faces_; }
     uint64_t next_face() const { return faces_ + fb.count(); }
 
-    [[noreturn]] void BadIndex(const FileLoc& loc, const char* what, int64_t v) const {
+    [[noreturn]] void BadIndex(const FileLoc& loc, const char* what, uint64_t face,
+                               int64_t v) const {
         if (v < 0)
-            InputError(loc, "{} {}: negative vertex index {}", what, next_face(), v);
+            InputError(loc, "{} {}: negative vertex index {}", what, face, v);
         InputError(loc, "{} {}: vertex index {} out of range, the header declares {} vertices",
-                   what, next_face(), v, vertex_count_);
+                   what, face, v, vertex_count_);
     }
 
 private:
@@ -253,7 +276,9 @@ struct StripState {
             uint64_t q = (n & 1) ? a : b;
             if (p != q && q != v && p != v) {
                 em.fb.size.push_back(3);
-                em.fb.index.insert(em.fb.index.end(), {p, q, v});
+                em.fb.index.push_back(p);  // not insert({..}): its temporary stalls
+                em.fb.index.push_back(q);
+                em.fb.index.push_back(v);
                 em.FaceAdded();
             }
         }
@@ -265,12 +290,13 @@ struct StripState {
 
 // Converts one vertex's values (as doubles, in role order) and appends it; checks that
 // all are finite. Integer colours map to [0,1] by their type's maximum, float colours
-// are clamped to [0,1].
-void AppendVertex(const double* v, const Plan& plan, Emitter& em, const FileLoc& loc) {
+// are clamped to [0,1]. Messages name the record's byte offset, or its line for ASCII.
+void AppendVertex(const double* v, const Plan& plan, Emitter& em, const std::string& file,
+                  uint64_t offset, uint64_t line) {
     auto finite = [&](int role) {
         float f = float(v[role]);
-        if (!(std::fabs(f) <= kFloatMax))
-            InputError(loc, "vertex {}: {} = {} is not a finite float",
+        if (!(std::fabs(f) <= kFloatMax)) [[unlikely]]
+            InputError({file, offset, line}, "vertex {}: {} = {} is not a finite float",
                        em.vertices_delivered() + em.vb.size(),
                        *plan.props[size_t(plan.role_prop[role])].name, v[role]);
         return f;
@@ -609,11 +635,16 @@ private:
     // `values` holds k records of `width` floats; names the first non-finite one.
     void CheckFinite(const Plan& plan, const float* values, int width, size_t k, int first_role,
                      size_t n0) {
-        bool ok = true;
+        // Non-finite floats are those whose magnitude bits reach the all-ones exponent;
+        // a max over the bits vectorizes, a float compare per value does not.
+        uint32_t most = 0;
         const size_t n = k * size_t(width);
-        for (size_t i = 0; i < n; ++i)
-            ok &= std::fabs(values[i]) <= kFloatMax;
-        if (ok) [[likely]]
+        for (size_t i = 0; i < n; ++i) {
+            uint32_t bits;
+            std::memcpy(&bits, values + i, 4);
+            most = std::max(most, bits & 0x7fffffffu);
+        }
+        if (most < 0x7f800000u) [[likely]]
             return;
         for (size_t i = 0; i < n; ++i)
             if (!(std::fabs(values[i]) <= kFloatMax))
@@ -634,15 +665,50 @@ private:
         const uint64_t count = plan.decl->count;
         const uint64_t nv = em_.vertex_count();
         FaceBatch& fb = em_.fb;
-        for (uint64_t f = 0; f < count; ++f) {
+        uint64_t f = 0;
+        while (f < count) {
             w_.record = f;
             const uint8_t* p = w_.Need(13);  // a triangle; larger polygons ask again
             const uint32_t n = p[0];
-            if (n != 3) [[unlikely]] {
-                if (n < 3)
-                    BadCorners({w_.file(), w_.Offset()}, "face", em_.next_face(), n);
-                p = w_.Need(1 + 4 * size_t(n));
+            if (n == 3) [[likely]] {
+                // A run of triangles inside the window and the batch, in one tight loop.
+                const size_t most =
+                    size_t(std::min<uint64_t>({count - f, em_.FaceRoom(), w_.Available() / 13}));
+                size_t k = 1;
+                while (k < most && p[13 * k] == 3)
+                    ++k;
+                const size_t at = fb.index.size();
+                fb.index.resize(at + 3 * k);
+                fb.size.resize(fb.size.size() + k, 3);
+                uint64_t* out = fb.index.data() + at;
+                bool ok = true;
+                auto index = [](uint32_t raw) {
+                    return kSigned ? uint64_t(int64_t(int32_t(raw))) : uint64_t(raw);
+                };
+                for (size_t i = 0; i < k; ++i) {
+                    const uint8_t* r = p + 1 + 13 * i;
+                    const uint64_t a = index(LoadU32<kSwap>(r));
+                    const uint64_t b = index(LoadU32<kSwap>(r + 4));
+                    const uint64_t c = index(LoadU32<kSwap>(r + 8));
+                    ok &= (a < nv) & (b < nv) & (c < nv);
+                    out[3 * i] = a;
+                    out[3 * i + 1] = b;
+                    out[3 * i + 2] = c;
+                }
+                if (!ok) [[unlikely]] {
+                    for (size_t i = 0; i < 3 * k; ++i)
+                        if (out[i] >= nv)
+                            em_.BadIndex({w_.file(), w_.Offset() + 13 * (i / 3) + 1 + 4 * (i % 3)},
+                                         "face", em_.next_face() - k + i / 3, int64_t(out[i]));
+                }
+                w_.Advance(13 * k);
+                f += k;
+                em_.FaceAdded();
+                continue;
             }
+            if (n < 3)
+                BadCorners({w_.file(), w_.Offset()}, "face", em_.next_face(), n);
+            p = w_.Need(1 + 4 * size_t(n));
             const size_t at = fb.index.size();
             fb.index.resize(at + n);
             uint64_t* out = fb.index.data() + at;
@@ -656,13 +722,66 @@ private:
             if (!ok) [[unlikely]] {
                 for (uint32_t j = 0; j < n; ++j)
                     if (out[j] >= nv)
-                        em_.BadIndex({w_.file(), w_.Offset() + 1 + 4 * j}, "face",
-                                     kSigned ? int64_t(out[j]) : int64_t(out[j]));
+                        em_.BadIndex({w_.file(), w_.Offset() + 1 + 4 * j}, "face", em_.next_face(),
+                                     int64_t(out[j]));
             }
             fb.size.push_back(n);
             w_.Advance(1 + 4 * size_t(n));
+            ++f;
             em_.FaceAdded();
         }
+    }
+
+    // m strip indices of type T at the window position. Triangles collect in a small
+    // local block (written unconditionally, kept by advancing the count) and are appended
+    // in bulk; the strip state stays in registers.
+    template <typename T>
+    void StripChunk(StripState& strip, size_t m) {
+        constexpr size_t kBlock = 512;
+        uint64_t tri[3 * kBlock];
+        const uint8_t* s = w_.Pos();
+        const uint64_t nv = em_.vertex_count();
+        FaceBatch& fb = em_.fb;
+        uint64_t a = strip.a, b = strip.b, n = strip.n;
+        size_t j = 0;
+        while (j < m) {
+            // Each index adds at most one triangle: the block never overfills the batch.
+            const size_t end = j + std::min({m - j, kBlock, em_.FaceRoom()});
+            size_t t = 0;
+            for (; j < end; ++j) {
+                T raw;
+                std::memcpy(&raw, s + j * sizeof(T), sizeof(T));
+                if constexpr (kSwap && sizeof(T) == 2)
+                    raw = T(__builtin_bswap16(uint16_t(raw)));
+                if constexpr (kSwap && sizeof(T) == 4)
+                    raw = T(__builtin_bswap32(uint32_t(raw)));
+                const int64_t v = int64_t(raw);
+                if (uint64_t(v) >= nv) [[unlikely]] {
+                    if (v == -1) {
+                        n = 0;
+                        continue;
+                    }
+                    em_.BadIndex({w_.file(), w_.Offset() + j * sizeof(T)}, "tristrip triangle",
+                                 em_.next_face() + t, v);
+                }
+                const uint64_t w = uint64_t(v);
+                const uint64_t p = (n & 1) ? b : a;
+                const uint64_t q = (n & 1) ? a : b;
+                tri[3 * t] = p;
+                tri[3 * t + 1] = q;
+                tri[3 * t + 2] = w;
+                t += size_t((n >= 2) & (p != q) & (q != w) & (p != w));
+                a = b;
+                b = w;
+                ++n;
+            }
+            fb.index.insert(fb.index.end(), tri, tri + 3 * t);
+            fb.size.insert(fb.size.end(), t, 3u);
+            em_.FaceAdded();
+        }
+        strip.a = a;
+        strip.b = b;
+        strip.n = n;
     }
 
     // Any element, one property at a time.
@@ -698,7 +817,7 @@ private:
                         if (v < 0 || uint64_t(v) >= nv)
                             em_.BadIndex(
                                 {w_.file(), at + PlyTypeSize(p.count_type) + uint64_t(j) * size},
-                                "face", v);
+                                "face", em_.next_face(), v);
                         em_.fb.index.push_back(uint64_t(v));
                     }
                     em_.fb.size.push_back(uint32_t(n));
@@ -710,18 +829,28 @@ private:
                     while (left > 0) {
                         if (w_.Available() < size)
                             w_.Need(size);
-                        size_t m = size_t(std::min<uint64_t>(left, w_.Available() / size));
-                        const uint8_t* s = w_.Pos();
-                        for (size_t j = 0; j < m; ++j) {
-                            const int64_t v = LoadInt<kSwap>(s + j * size, p.type);
-                            if (v == -1) {
-                                strip.n = 0;
-                                continue;
-                            }
-                            if (v < 0 || uint64_t(v) >= nv)
-                                em_.BadIndex({w_.file(), w_.Offset() + j * size},
-                                             "tristrip triangle", v);
-                            strip.Add(uint64_t(v), em_);
+                        const size_t m = size_t(std::min<uint64_t>(left, w_.Available() / size));
+                        switch (p.type) {
+                        case PlyType::Int8:
+                            StripChunk<int8_t>(strip, m);
+                            break;
+                        case PlyType::UInt8:
+                            StripChunk<uint8_t>(strip, m);
+                            break;
+                        case PlyType::Int16:
+                            StripChunk<int16_t>(strip, m);
+                            break;
+                        case PlyType::UInt16:
+                            StripChunk<uint16_t>(strip, m);
+                            break;
+                        case PlyType::Int32:
+                            StripChunk<int32_t>(strip, m);
+                            break;
+                        case PlyType::UInt32:
+                            StripChunk<uint32_t>(strip, m);
+                            break;
+                        default:
+                            CHECK(false);  // index types are integers (MakePlan)
                         }
                         w_.Advance(m * size);
                         left -= m;
@@ -731,7 +860,7 @@ private:
                 }
             }
             if (plan.kind == Kind::Vertex)
-                AppendVertex(values, plan, em_, {w_.file(), record_offset});
+                AppendVertex(values, plan, em_, w_.file(), record_offset, FileLoc::kNone);
         }
     }
 
@@ -775,7 +904,7 @@ public:
                     for (int64_t j = 0; j < n; ++j) {
                         const int64_t v = ParseInt(Next(), p.type, p);
                         if (v < 0 || uint64_t(v) >= nv)
-                            em_.BadIndex(Loc(), "face", v);
+                            em_.BadIndex(Loc(), "face", em_.next_face(), v);
                         em_.fb.index.push_back(uint64_t(v));
                     }
                     em_.fb.size.push_back(uint32_t(n));
@@ -789,7 +918,7 @@ public:
                             continue;
                         }
                         if (v < 0 || uint64_t(v) >= nv)
-                            em_.BadIndex(Loc(), "tristrip triangle", v);
+                            em_.BadIndex(Loc(), "tristrip triangle", em_.next_face(), v);
                         strip.Add(uint64_t(v), em_);
                     }
                 } else {
@@ -798,7 +927,7 @@ public:
                 }
             }
             if (plan.kind == Kind::Vertex)
-                AppendVertex(values, plan, em_, {in_.name(), FileLoc::kNone, record_line});
+                AppendVertex(values, plan, em_, in_.name(), FileLoc::kNone, record_line);
         }
         if (plan.kind == Kind::Vertex)
             em_.FlushVertices();
@@ -895,8 +1024,7 @@ private:
         auto [q, ec] = std::from_chars(b, e, v);
         if (ec != std::errc() || q != e || b == e)
             BadNumber(tok, p, "an integer");
-        const double lo = PlyTypeIsSigned(t) ? -PlyTypeMax(t) - 1 : 0.0;
-        if (double(v) < lo || double(v) > PlyTypeMax(t))
+        if (double(v) < PlyTypeMin(t) || double(v) > PlyTypeMax(t))
             BadNumber(tok, p, "an integer in the range of its declared type");
         return v;
     }
@@ -993,6 +1121,8 @@ void ReadPly(InputStream& in, MeshSink& sink, const ReadOptions& opt) {
     }
 
     Emitter em(sink, opt, mh.vertex_count);
+    em.Reserve(mh.vertex_count, have_strips ? kUnknownCount : mh.face_count, mh.has_normals,
+               mh.has_colors, mh.has_alpha, mh.has_uvs);
     sink.Begin(mh);
     if (h.encoding == PlyEncoding::Ascii) {
         AsciiBody body(in, em, h.lines);

@@ -25,6 +25,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
+#include <fmt/compile.h>
 #include <iterator>
 #include <unistd.h>
 
@@ -224,10 +225,10 @@ public:
                 any_index_ = true;
             }
             if (ascii) {
-                auto o = std::back_inserter(scratch_);
-                fmt::format_to(o, "{}", n);
+                auto o = fmt::appender(scratch_);
+                fmt::format_to(o, FMT_COMPILE("{}"), n);
                 for (uint32_t j = 0; j < n; ++j)
-                    fmt::format_to(o, " {}", idx[j]);
+                    fmt::format_to(o, FMT_COMPILE(" {}"), idx[j]);
                 scratch_.push_back('\n');
             } else {
                 const size_t base = scratch_.size();
@@ -371,30 +372,31 @@ private:
         const size_t n = b.size();
         const bool has_n = !b.normal.empty(), has_c = !b.color.empty(), has_a = !b.alpha.empty(),
                    has_uv = !b.uv.empty();
-        auto o = std::back_inserter(scratch_);
+        auto o = fmt::appender(scratch_);
         for (size_t i = 0; i < n; ++i) {
             const Vec3f& v = b.position[i];
-            fmt::format_to(o, "{} {} {}", v.x, v.y, v.z);
+            fmt::format_to(o, FMT_COMPILE("{} {} {}"), v.x, v.y, v.z);
             if (normals_) {
                 const Vec3f nn = has_n ? b.normal[i] : Vec3f{};
-                fmt::format_to(o, " {} {} {}", nn.x, nn.y, nn.z);
+                fmt::format_to(o, FMT_COMPILE(" {} {} {}"), nn.x, nn.y, nn.z);
             }
             if (colors_) {
                 const Vec3f c = has_c ? b.color[i] : Vec3f{1, 1, 1};
                 const float a = has_a ? b.alpha[i] : 1.0f;
                 if (opt_.float_colors) {
-                    fmt::format_to(o, " {} {} {}", c.x, c.y, c.z);
+                    fmt::format_to(o, FMT_COMPILE(" {} {} {}"), c.x, c.y, c.z);
                     if (alpha_)
-                        fmt::format_to(o, " {}", a);
+                        fmt::format_to(o, FMT_COMPILE(" {}"), a);
                 } else {
-                    fmt::format_to(o, " {} {} {}", ToUchar(c.x), ToUchar(c.y), ToUchar(c.z));
+                    fmt::format_to(o, FMT_COMPILE(" {} {} {}"), ToUchar(c.x), ToUchar(c.y),
+                                   ToUchar(c.z));
                     if (alpha_)
-                        fmt::format_to(o, " {}", ToUchar(a));
+                        fmt::format_to(o, FMT_COMPILE(" {}"), ToUchar(a));
                 }
             }
             if (uvs_) {
                 const Vec2f t = has_uv ? b.uv[i] : Vec2f{};
-                fmt::format_to(o, " {} {}", t.x, t.y);
+                fmt::format_to(o, FMT_COMPILE(" {} {}"), t.x, t.y);
             }
             scratch_.push_back('\n');
         }
@@ -411,7 +413,7 @@ private:
     uint64_t max_index_ = 0;
     bool any_index_ = false;
     SpillFile vertex_spill_, face_spill_;
-    std::string scratch_;
+    fmt::memory_buffer scratch_;
 };
 
 }  // namespace

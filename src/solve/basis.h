@@ -78,7 +78,8 @@ void EvalControlGrid(int order, int g, const float* coeffs, int count, float* ou
 // the result interpolates the values at the (M+1)^2 Gauss points exactly.
 void ProjectGauss(int order, int n, const float* values, int count, float* coeffs);
 
-// Largest |fit - value| over the g x g control grid and all blocks; values as EvalControlGrid.
+// Largest |fit - value| over the g x g control grid and all blocks (count <= 64); values laid
+// out as EvalControlGrid writes them.
 float ControlGridError(int order, int g, const float* coeffs, int count, const float* values);
 
 // Two-scale matrix of child c: child_m = sum_k P_c[m*N+k] parent_k, the exact restriction of

@@ -173,8 +173,8 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
                 PolygonLight pl;
                 for (const auto& v : l.at("vertices"))
                     pl.vertices.push_back(ReadVec3(v, scene_file, at + ".vertices"));
-                if (pl.vertices.size() < 3)
-                    InputError({scene_file}, "{}.vertices: a polygon needs 3 or more", at);
+                if (pl.vertices.size() < 3 || pl.vertices.size() > 64)
+                    InputError({scene_file}, "{}.vertices: a polygon needs 3 to 64 vertices", at);
                 pl.radiance = ReadVec3(l.at("radiance"), scene_file, at + ".radiance");
                 pl.two_sided = l.value("two_sided", false);
                 scene.lights.push_back(pl);

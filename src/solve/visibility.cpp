@@ -123,6 +123,14 @@ RTCBuildQuality ToEmbree(BuildQuality q) {
     return RTC_BUILD_QUALITY_MEDIUM;
 }
 
+// The coherent hint is passed to the stream API only: with Embree 3.13.5 (Debian build, AVX-512)
+// rtcOccluded16 with RTC_INTERSECT_CONTEXT_FLAG_COHERENT on a robust scene never returns for
+// some bundles of segments (seen on a 180K-triangle height field); see visibility_test.
+RTCIntersectContextFlags ContextFlags(const VisibilityOptions& o) {
+    return o.coherent && o.method == TraceMethod::kStream ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                                          : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+}
+
 constexpr float kNegInf = -std::numeric_limits<float>::infinity();
 constexpr size_t kChunk = 256;  // rays per stream call (on the stack: 256 * 48 bytes)
 
@@ -282,21 +290,29 @@ VisibilityScene::VisibilityScene(const VisibilityOptions& options)
 
 VisibilityScene::~VisibilityScene() = default;
 
-uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
-                                       std::span<const uint32_t> indices, const char* name) {
-    CHECK(!committed_);
+namespace {
+// Throws InputError unless indices form triangles over nv vertices within 32-bit ranges.
+void ValidateMesh(size_t nv, std::span<const uint32_t> indices, const char* name) {
     const FileLoc loc{name};
-    if (positions.size() % 3 != 0)
-        InputError(loc, "{} position floats is not a multiple of 3", positions.size());
     if (indices.size() % 3 != 0)
         InputError(loc, "{} triangle indices is not a multiple of 3", indices.size());
-    const size_t nv = positions.size() / 3, nt = indices.size() / 3;
+    const size_t nt = indices.size() / 3;
     if (nv > 0xFFFFFFFEu || nt > 0xFFFFFFFEu)
         InputError(loc, "{} vertices / {} triangles exceed one geometry's 32-bit range", nv, nt);
     for (size_t i = 0; i < indices.size(); ++i) {
         if (indices[i] >= nv)
             InputError(loc, "triangle {} uses vertex {} of {}", i / 3, indices[i], nv);
     }
+}
+}  // namespace
+
+uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
+                                       std::span<const uint32_t> indices, const char* name) {
+    CHECK(!committed_);
+    if (positions.size() % 3 != 0)
+        InputError(FileLoc{name}, "{} position floats is not a multiple of 3", positions.size());
+    const size_t nv = positions.size() / 3, nt = indices.size() / 3;
+    ValidateMesh(nv, indices, name);
     const uint32_t id = geometries_++;
     if (nt == 0)
         return id;  // nothing to trace; the id stays reserved
@@ -324,6 +340,34 @@ uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
     return id;
 }
 
+uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, size_t vertex_count,
+                                             std::span<const uint32_t> indices, const char* name) {
+    CHECK(!committed_);
+    // Embree reads the last vertex with a 16-byte load: one spare float past it.
+    if (positions.size() < 3 * vertex_count + 1)
+        InputError(FileLoc{name}, "{} position floats for {} vertices: need 3 per vertex + 1 spare",
+                   positions.size(), vertex_count);
+    ValidateMesh(vertex_count, indices, name);
+    const size_t nt = indices.size() / 3;
+    const uint32_t id = geometries_++;
+    if (nt == 0)
+        return id;
+
+    RTCGeometry geom = rtcNewGeometry(GetDevice(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    ThrowIfError("rtcNewGeometry");
+    rtcSetGeometryBuildQuality(geom, ToEmbree(options_.quality));
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions.data(),
+                               0, 3 * sizeof(float), vertex_count);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
+                               3 * sizeof(uint32_t), nt);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl_->scene, geom, id);
+    rtcReleaseGeometry(geom);
+    ThrowIfError("adding a shared triangle mesh");
+    triangles_ += nt;
+    return id;
+}
+
 void VisibilityScene::Commit() {
     CHECK(!committed_);
     rtcCommitScene(impl_->scene);
@@ -338,8 +382,7 @@ void VisibilityScene::Occluded(std::span<const Segment> segments,
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = options_.coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                  : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags = ContextFlags(options_);
     RTCScene scene = impl_->scene;
     switch (options_.method) {
     case TraceMethod::kStream: {
@@ -390,8 +433,7 @@ void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = options_.coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                  : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags = ContextFlags(options_);
     RTCScene scene = impl_->scene;
     switch (options_.method) {
     case TraceMethod::kStream: {

@@ -7,7 +7,8 @@
 // - flush-to-zero / denormals-are-zero are set for the duration of each query call on the
 //   calling thread (TBB workers included) and the caller's MXCSR is restored afterwards, so
 //   float results elsewhere do not depend on which thread traced before;
-// - vertex buffers are allocated by Embree (padded for its 16-byte loads), input is copied;
+// - vertex buffers are allocated by Embree (padded for its 16-byte loads) and input copied,
+//   or shared with the caller, who then provides the padding (AddTrianglesShared);
 // - Embree errors become mebake::Error exceptions naming the call, never silent failures;
 // - a memory monitor counts Embree's bytes (EmbreeMemoryBytes) and can cap them
 //   (SetEmbreeMemoryLimit): a build over the limit throws instead of eating memory.
@@ -16,6 +17,7 @@
 // same distance, e.g. a shared edge, may resolve to either).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -53,8 +55,10 @@ struct VisibilityOptions {
     bool compact = true;  // RTC_SCENE_FLAG_COMPACT: smaller BVH, slightly slower traversal
     bool robust = true;   // RTC_SCENE_FLAG_ROBUST: watertight, no leaks through shared edges
     BuildQuality quality = BuildQuality::kMedium;
-    TraceMethod method = TraceMethod::kPacket16;
-    bool coherent = false;  // RTC_INTERSECT_CONTEXT_FLAG_COHERENT (batches of similar rays)
+    TraceMethod method = TraceMethod::kStream;  // fastest for node-to-node bundles here
+    // RTC_INTERSECT_CONTEXT_FLAG_COHERENT for batches of similar rays; used with kStream only
+    // (packets ignore it: Embree 3.13.5 can hang in rtcOccluded16 with it, see visibility.cpp).
+    bool coherent = false;
 };
 
 class VisibilityScene {
@@ -70,6 +74,13 @@ public:
     // `name` is used in error messages.
     uint32_t AddTriangles(std::span<const float> positions, std::span<const uint32_t> indices,
                           const char* name = "mesh");
+
+    // Same without copying: Embree reads the caller's arrays, which must stay alive and
+    // unchanged until this scene is destroyed. positions holds x,y,z for vertex_count vertices
+    // plus at least one spare float (Embree's 16-byte loads read past the last vertex).
+    // Shared arrays are the caller's memory and are not counted by EmbreeMemoryBytes().
+    uint32_t AddTrianglesShared(std::span<const float> positions, size_t vertex_count,
+                                std::span<const uint32_t> indices, const char* name = "mesh");
 
     // Builds the BVH. Throws Error if Embree fails (e.g. over the memory limit).
     void Commit();

@@ -14,18 +14,19 @@
 // needs no candidates.
 #include "stream/chart_grid.h"
 
+#include "core/check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include "core/check.h"
 
 namespace mebake::stream {
 
 namespace {
 
-// Barycentric coordinates below -kInside count as outside.
-constexpr double kInside = 1e-9;
+// Points this close (in uv) to a triangle count as inside it: a few float ulps at 1.0,
+// the resolution of the uv the grid is given.
+constexpr double kInsideDistance = 0x1p-22;
 
 struct Tri2 {
     Vec2d p[3];
@@ -43,7 +44,8 @@ Tri2 TriangleAt(const ChartGrid& g, uint32_t t) {
 // Signed barycentrics; false for a zero-area triangle.
 bool Barycentric(const Tri2& t, const Vec2d& u, double b[3]) {
     const double area = Cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
-    if (area == 0 || !std::isfinite(area)) return false;
+    if (area == 0 || !std::isfinite(area))
+        return false;
     b[0] = Cross(t.p[1] - u, t.p[2] - u) / area;
     b[1] = Cross(t.p[2] - u, t.p[0] - u) / area;
     b[2] = 1 - b[0] - b[1];
@@ -106,13 +108,15 @@ bool Overlaps(const Tri2& t, const Box& b) {
     for (int axis = 0; axis < 2; ++axis) {
         const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
         const double hi = std::max({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
-        if (hi < b.lo[axis] || lo > b.hi[axis]) return false;
+        if (hi < b.lo[axis] || lo > b.hi[axis])
+            return false;
     }
     const Vec2d corners[4] = {b.lo, {b.hi.x, b.lo.y}, b.hi, {b.lo.x, b.hi.y}};
     for (int k = 0; k < 3; ++k) {
         const Vec2d e = t.p[(k + 1) % 3] - t.p[k];
         const Vec2d n(-e.y, e.x);
-        if (n.x == 0 && n.y == 0) continue;
+        if (n.x == 0 && n.y == 0)
+            continue;
         const double tri_a = Dot(n, t.p[k]), tri_b = Dot(n, t.p[(k + 2) % 3]);
         const double tri_lo = std::min(tri_a, tri_b), tri_hi = std::max(tri_a, tri_b);
         double box_lo = INFINITY, box_hi = -INFINITY;
@@ -120,7 +124,8 @@ bool Overlaps(const Tri2& t, const Box& b) {
             box_lo = std::min(box_lo, Dot(n, c));
             box_hi = std::max(box_hi, Dot(n, c));
         }
-        if (box_hi < tri_lo || box_lo > tri_hi) return false;
+        if (box_hi < tri_lo || box_lo > tri_hi)
+            return false;
     }
     return true;
 }
@@ -128,18 +133,21 @@ bool Overlaps(const Tri2& t, const Box& b) {
 // Distance between a box and a triangle: 0 if they overlap, else attained at a vertex of
 // one of the two convex polygons.
 double TriBoxDist2(const Tri2& t, const Box& b) {
-    if (Overlaps(t, b)) return 0;
+    if (Overlaps(t, b))
+        return 0;
     double d2 = INFINITY;
     const Vec2d corners[4] = {b.lo, {b.hi.x, b.lo.y}, b.hi, {b.lo.x, b.hi.y}};
-    for (const Vec2d& c : corners) d2 = std::min(d2, ClosestPoint(t, c).dist2);
-    for (const Vec2d& p : t.p) d2 = std::min(d2, PointBoxDist2(p, b));
+    for (const Vec2d& c : corners)
+        d2 = std::min(d2, ClosestPoint(t, c).dist2);
+    for (const Vec2d& p : t.p)
+        d2 = std::min(d2, PointBoxDist2(p, b));
     return d2;
 }
 
 // A bounding-volume hierarchy over the outline triangles, used at build time only.
 class OutlineBvh {
 public:
-    OutlineBvh(const std::vector<Tri2>& tris) : tris_(tris) {
+    explicit OutlineBvh(const std::vector<Tri2>& tris) : tris_(tris) {
         prims_.resize(tris.size());
         std::iota(prims_.begin(), prims_.end(), 0u);
         boxes_.resize(tris.size());
@@ -151,18 +159,21 @@ public:
                 b.hi = Vec2d(std::max(b.hi.x, p.x), std::max(b.hi.y, p.y));
             }
         }
-        if (!tris.empty()) BuildNode(0, uint32_t(tris.size()));
+        if (!tris.empty())
+            BuildNode(0, uint32_t(tris.size()));
     }
 
     // Index (into the outline list) of the triangle nearest to u; lowest index on ties.
-    uint32_t Nearest(const Vec2d& u) const {
+    uint32_t Nearest(const Vec2d& u) {
         uint32_t best = kNoTriangle;
         double best_d2 = INFINITY;
-        std::vector<uint32_t> stack = {0};
+        std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
+        stack.assign(1, 0);
         while (!stack.empty()) {
             const Node& node = nodes_[stack.back()];
             stack.pop_back();
-            if (PointBoxDist2(u, node.box) > best_d2) continue;
+            if (PointBoxDist2(u, node.box) > best_d2)
+                continue;
             if (node.count > 0) {
                 for (uint32_t i = node.first; i < node.first + node.count; ++i) {
                     const double d2 = ClosestPoint(tris_[prims_[i]], u).dist2;
@@ -184,15 +195,18 @@ public:
     }
 
     // Appends the outline indices of triangles within sqrt(r2) of box b.
-    void WithinBox(const Box& b, double r2, std::vector<uint32_t>* out) const {
-        std::vector<uint32_t> stack = {0};
+    void WithinBox(const Box& b, double r2, std::vector<uint32_t>* out) {
+        std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
+        stack.assign(1, 0);
         while (!stack.empty()) {
             const Node& node = nodes_[stack.back()];
             stack.pop_back();
-            if (BoxBoxDist2(b, node.box) > r2) continue;
+            if (BoxBoxDist2(b, node.box) > r2)
+                continue;
             if (node.count > 0) {
                 for (uint32_t i = node.first; i < node.first + node.count; ++i)
-                    if (TriBoxDist2(tris_[prims_[i]], b) <= r2) out->push_back(prims_[i]);
+                    if (TriBoxDist2(tris_[prims_[i]], b) <= r2)
+                        out->push_back(prims_[i]);
                 continue;
             }
             stack.push_back(node.first);
@@ -208,8 +222,8 @@ private:
     };
     static constexpr uint32_t kLeafSize = 4;
 
-    // Builds the node for prims_[begin, end) at nodes_[index]; returns nothing, children
-    // are allocated in pairs so a node only stores its left child.
+    // Builds the tree over prims_[begin, end) with a work list (no recursion). Children
+    // are allocated in pairs, so a node only stores its left child.
     void BuildNode(uint32_t begin, uint32_t end) {
         nodes_.push_back({});
         std::vector<std::array<uint32_t, 3>> work = {{0, begin, end}};  // node, begin, end
@@ -254,6 +268,7 @@ private:
     std::vector<uint32_t> prims_;
     std::vector<Box> boxes_;
     std::vector<Node> nodes_;
+    std::vector<uint32_t> stack_;
 };
 
 struct LocateResult {
@@ -266,20 +281,37 @@ struct LocateResult {
 
 LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
     LocateResult r;
-    if (g.triangles.empty()) return r;
+    if (g.triangles.empty())
+        return r;
     const Vec2d u(std::clamp(double(u_in.x), 0.0, 1.0), std::clamp(double(u_in.y), 0.0, 1.0));
     const int res = g.resolution;
     const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
     const size_t cell = size_t(iy) * res + ix;
     for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
         double b[3];
-        if (!Barycentric(TriangleAt(g, g.cell_tris[i]), u, b)) continue;
-        if (b[0] < -kInside || b[1] < -kInside || b[2] < -kInside) continue;
+        if (!Barycentric(TriangleAt(g, g.cell_tris[i]), u, b))
+            continue;
+        if (b[0] < 0 || b[1] < 0 || b[2] < 0)
+            continue;
         r.triangle = g.cell_tris[i];
-        double sum = 0;
-        for (int k = 0; k < 3; ++k) sum += (r.b[k] = std::max(b[k], 0.0));
-        for (double& x : r.b) x /= sum;
+        std::copy(b, b + 3, r.b);
         r.real = true;
+        r.nearest = u;
+        return r;
+    }
+    // Within float resolution of a triangle (e.g. a rounded point of a boundary edge):
+    // real, at the closest point.
+    double best2 = kInsideDistance * kInsideDistance;
+    for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
+        const Closest c = ClosestPoint(TriangleAt(g, g.cell_tris[i]), u);
+        if (c.dist2 <= best2 && (!r.real || c.dist2 < best2)) {
+            best2 = c.dist2;
+            r.triangle = g.cell_tris[i];
+            std::copy(c.b, c.b + 3, r.b);
+            r.real = true;
+        }
+    }
+    if (r.real) {
         r.nearest = u;
         return r;
     }
@@ -321,14 +353,16 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     const size_t tri_count = triangles.size();
     const size_t cell_count = size_t(resolution) * resolution;
     for (const auto& f : triangles)
-        for (uint32_t v : f) CHECK_LT(v, uv.size());
+        for (uint32_t v : f)
+            CHECK_LT(v, uv.size());
 
     std::vector<Tri2> tris(tri_count);
-    for (size_t t = 0; t < tri_count; ++t) tris[t] = TriangleAt(g, uint32_t(t));
+    for (size_t t = 0; t < tri_count; ++t)
+        tris[t] = TriangleAt(g, uint32_t(t));
     const double h = 1.0 / resolution;
-    // Cells are closed boxes, widened a little so a point on a cell border finds the
-    // triangles of both neighbours.
-    const double pad = 1e-9;
+    // Cells are closed boxes, widened by Locate's tolerance so that a point finds every
+    // triangle within the tolerance in its own cell's list.
+    const double pad = kInsideDistance;
     auto cell_box = [&](size_t c) {
         const double x = double(c % resolution) * h, y = double(c / resolution) * h;
         return Box{{x - pad, y - pad}, {x + h + pad, y + h + pad}};
@@ -343,7 +377,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     for (int pass = 0; pass < 2; ++pass) {
         std::vector<uint32_t> fill;
         if (pass == 1) {
-            for (size_t c = 0; c < cell_count; ++c) g.cell_start[c + 1] += g.cell_start[c];
+            for (size_t c = 0; c < cell_count; ++c)
+                g.cell_start[c + 1] += g.cell_start[c];
             g.cell_tris.resize(g.cell_start[cell_count]);
             fill.assign(g.cell_start.begin(), g.cell_start.end() - 1);
         }
@@ -357,7 +392,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
             for (int y = y0; y <= y1; ++y) {
                 for (int x = x0; x <= x1; ++x) {
                     const size_t c = size_t(y) * resolution + x;
-                    if (!Overlaps(tri, cell_box(c))) continue;
+                    if (!Overlaps(tri, cell_box(c)))
+                        continue;
                     if (pass == 0)
                         ++g.cell_start[c + 1];
                     else
@@ -381,26 +417,30 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
         for (size_t t = 0; t < tri_count; ++t) {
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = triangles[t][k], b = triangles[t][(k + 1) % 3];
-                edges.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), uint32_t(t),
-                                 a < b});
+                edges.push_back(
+                    {(uint64_t(std::min(a, b)) << 32) | std::max(a, b), uint32_t(t), a < b});
             }
             const Tri2& tri = tris[t];
-            if (!(Cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0]) > 0)) outline[t] = 1;
+            if (!(Cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0]) > 0))
+                outline[t] = 1;
         }
         std::sort(edges.begin(), edges.end(), [](const HalfEdge& a, const HalfEdge& b) {
             return a.key < b.key || (a.key == b.key && a.tri < b.tri);
         });
         for (size_t i = 0; i < edges.size();) {
             size_t j = i;
-            while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+            while (j < edges.size() && edges[j].key == edges[i].key)
+                ++j;
             const bool interior = j - i == 2 && edges[i].forward != edges[i + 1].forward;
             if (!interior)
-                for (size_t k = i; k < j; ++k) outline[edges[k].tri] = 1;
+                for (size_t k = i; k < j; ++k)
+                    outline[edges[k].tri] = 1;
             i = j;
         }
     }
     for (size_t t = 0; t < tri_count; ++t)
-        if (outline[t]) g.outline_tris.push_back(uint32_t(t));
+        if (outline[t])
+            g.outline_tris.push_back(uint32_t(t));
     if (g.outline_tris.empty()) {  // a closed surface: keep the query exact regardless
         g.outline_tris.resize(tri_count);
         std::iota(g.outline_tris.begin(), g.outline_tris.end(), 0u);
@@ -408,14 +448,16 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     }
 
     std::vector<Tri2> outline_geom(g.outline_tris.size());
-    for (size_t i = 0; i < g.outline_tris.size(); ++i) outline_geom[i] = tris[g.outline_tris[i]];
-    const OutlineBvh bvh(outline_geom);
+    for (size_t i = 0; i < g.outline_tris.size(); ++i)
+        outline_geom[i] = tris[g.outline_tris[i]];
+    OutlineBvh bvh(outline_geom);
 
     g.near_start.assign(cell_count + 1, 0);
     std::vector<uint32_t> found;
     for (size_t c = 0; c < cell_count; ++c) {
         g.near_start[c + 1] = g.near_start[c];
-        if (tri_count == 0) continue;
+        if (tri_count == 0)
+            continue;
         const Box box = cell_box(c);
         const Vec2d centre = (box.lo + box.hi) * 0.5;
         bool touches_outline = false, centre_inside = false;
@@ -429,7 +471,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
             if (!centre_inside && Barycentric(tris[t], centre, b))
                 centre_inside = b[0] >= 0 && b[1] >= 0 && b[2] >= 0;
         }
-        if (!touches_outline && centre_inside) continue;
+        if (!touches_outline && centre_inside)
+            continue;
 
         const uint32_t nearest = bvh.Nearest(centre);
         double ub2 = 0;
@@ -440,7 +483,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
         const double ub = std::sqrt(ub2) * (1 + 1e-9) + 1e-12;
         found.clear();
         bvh.WithinBox(box, ub * ub, &found);
-        for (uint32_t& f : found) f = g.outline_tris[f];
+        for (uint32_t& f : found)
+            f = g.outline_tris[f];
         std::sort(found.begin(), found.end());
         g.near_tris.insert(g.near_tris.end(), found.begin(), found.end());
         g.near_start[c + 1] = uint32_t(g.near_tris.size());
@@ -453,7 +497,8 @@ GridLocation ChartGrid::Locate(Vec2f u) const {
     GridLocation out;
     out.triangle = r.triangle;
     out.real = r.real;
-    for (int k = 0; k < 3; ++k) out.barycentric[k] = float(r.b[k]);
+    for (int k = 0; k < 3; ++k)
+        out.barycentric[k] = float(r.b[k]);
     out.nearest_uv = Vec2f(float(r.nearest.x), float(r.nearest.y));
     out.distance = float(std::sqrt(r.dist2));
     return out;
@@ -470,7 +515,8 @@ SurfacePoint Evaluate(const ChartGrid& grid, std::span<const Vec3f> position,
                       std::span<const Vec3f> vertex_normal, Vec2f u) {
     SurfacePoint s;
     const LocateResult r = LocateDouble(grid, u);
-    if (r.triangle == kNoTriangle) return s;
+    if (r.triangle == kNoTriangle)
+        return s;
     const auto& f = grid.triangles[r.triangle];
     const Vec3d p[3] = {Vec3d(position[f[0]]), Vec3d(position[f[1]]), Vec3d(position[f[2]])};
     const Vec3d at = p[0] * r.b[0] + p[1] * r.b[1] + p[2] * r.b[2];
@@ -480,9 +526,9 @@ SurfacePoint Evaluate(const ChartGrid& grid, std::span<const Vec3f> position,
     s.visible_position = Vec3f(at);
     if (r.real) {
         s.position = s.visible_position;
-        const Vec3d n = Normalize(Vec3d(vertex_normal[f[0]]) * r.b[0] +
-                                  Vec3d(vertex_normal[f[1]]) * r.b[1] +
-                                  Vec3d(vertex_normal[f[2]]) * r.b[2]);
+        const Vec3d n =
+            Normalize(Vec3d(vertex_normal[f[0]]) * r.b[0] + Vec3d(vertex_normal[f[1]]) * r.b[1] +
+                      Vec3d(vertex_normal[f[2]]) * r.b[2]);
         s.normal = Vec3f(Dot(n, n) > 0 ? n : face_normal);
         return s;
     }
@@ -516,7 +562,8 @@ std::vector<Vec3f> VertexNormals(std::span<const Vec3f> position,
         }
     }
     std::vector<Vec3f> out(position.size());
-    for (size_t v = 0; v < sum.size(); ++v) out[v] = Vec3f(Normalize(sum[v]));
+    for (size_t v = 0; v < sum.size(); ++v)
+        out[v] = Vec3f(Normalize(sum[v]));
     return out;
 }
 

@@ -11,12 +11,12 @@
 // stands in for u in visibility queries (x' in the seed paper).
 #pragma once
 
+#include "core/vec.h"
+
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 
@@ -31,8 +31,8 @@ struct GridLocation {
 };
 
 struct ChartGrid {
-    int resolution = 0;                            // G
-    std::vector<Vec2f> uv;                         // copy of the chart's uv
+    int resolution = 0;                              // G
+    std::vector<Vec2f> uv;                           // copy of the chart's uv
     std::vector<std::array<uint32_t, 3>> triangles;  // copy of the chart's triangles
     // Triangles overlapping cell c = (ix, iy), c = iy * G + ix:
     // cell_tris[cell_start[c] .. cell_start[c + 1]), ascending.
@@ -43,9 +43,9 @@ struct ChartGrid {
     // Triangles on the uv outline: with a boundary edge, or flipped / zero uv area.
     std::vector<uint32_t> outline_tris;
 
-    // Exact point location. u is clamped to [0,1]^2 first. A point within 1e-9 (in
-    // barycentric terms) of a triangle counts as inside it. Among overlapping triangles
-    // (a non-injective map) and among equally near ones, the lowest index wins.
+    // Exact point location. u is clamped to [0,1]^2 first. A point within 2^-22 (a few
+    // float ulps) of a triangle counts as inside it. Among overlapping triangles (a
+    // non-injective map) and among equally near ones, the lowest index wins.
     GridLocation Locate(Vec2f u) const;
 
     size_t MemoryBytes() const;
@@ -60,9 +60,9 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
                          const std::vector<std::array<uint32_t, 3>>& triangles, int resolution);
 
 struct SurfacePoint {
-    Vec3f position;         // on the chart (real) or extrapolated (virtual)
-    Vec3f normal;           // unit; interpolated vertex normal (real), triangle normal (virtual)
-    Vec3f visible_position; // the real point used for visibility: position itself when real
+    Vec3f position;          // on the chart (real) or extrapolated (virtual)
+    Vec3f normal;            // unit; interpolated vertex normal (real), triangle normal (virtual)
+    Vec3f visible_position;  // the real point used for visibility: position itself when real
     bool real = false;
     uint32_t triangle = kNoTriangle;
 };

@@ -3,14 +3,16 @@
 // placement, distortion metrics on the final float uv.
 #include "stream/parameterize.h"
 
-#include <fmt/format.h>
+#include "core/check.h"
+#include "stream/bff.h"
+#include "stream/cotan_laplacian.h"
+#include "stream/lscm.h"
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <numeric>
-
-#include "core/check.h"
-#include "stream/lscm.h"
+#include <utility>
 
 namespace mebake::stream {
 
@@ -63,7 +65,8 @@ uint32_t Find(std::vector<uint32_t>& parent, uint32_t v) {
 
 DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 3>> triangles) {
     const size_t tri_count = triangles.size();
-    if (tri_count == 0) return Fail(ParamStatus::kEmpty, "no triangles");
+    if (tri_count == 0)
+        return Fail(ParamStatus::kEmpty, "no triangles");
     if (tri_count > (size_t(1) << 30))
         return Fail(ParamStatus::kBadIndex, "too many triangles for 32-bit half-edge ids");
     for (size_t t = 0; t < tri_count; ++t) {
@@ -79,11 +82,17 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     // directed edges finds twins; a repeated directed edge means > 2 triangles on an edge
     // or two neighbours with opposite orientation.
     const uint32_t half_count = uint32_t(3 * tri_count);
-    auto from = [&](uint32_t h) { return triangles[h / 3][h % 3]; };
-    auto to = [&](uint32_t h) { return triangles[h / 3][(h % 3 + 1) % 3]; };
+    auto from = [&](uint32_t h) {
+        return triangles[h / 3][h % 3];
+    };
+    auto to = [&](uint32_t h) {
+        return triangles[h / 3][(h % 3 + 1) % 3];
+    };
     std::vector<uint32_t> order(half_count);
     std::iota(order.begin(), order.end(), 0u);
-    auto key = [&](uint32_t h) { return (uint64_t(from(h)) << 32) | to(h); };
+    auto key = [&](uint32_t h) {
+        return (uint64_t(from(h)) << 32) | to(h);
+    };
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
         const uint64_t ka = key(a), kb = key(b);
         return ka < kb || (ka == kb && a < b);
@@ -99,13 +108,15 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
         const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
         auto it = std::lower_bound(order.begin(), order.end(), want,
                                    [&](uint32_t x, uint64_t k) { return key(x) < k; });
-        if (it != order.end() && key(*it) == want) twin[h] = *it;
+        if (it != order.end() && key(*it) == want)
+            twin[h] = *it;
     }
 
     // Corners per vertex (CSR), unreferenced vertices, connectivity.
     std::vector<uint32_t> corner_start(size_t(vertex_count) + 1, 0);
     for (const auto& f : triangles)
-        for (uint32_t v : f) ++corner_start[v + 1];
+        for (uint32_t v : f)
+            ++corner_start[v + 1];
     for (uint32_t v = 0; v < vertex_count; ++v) {
         if (corner_start[v + 1] == 0)
             return Fail(ParamStatus::kNotDisc, fmt::format("vertex {} is unreferenced", v));
@@ -114,7 +125,8 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     std::vector<uint32_t> corners(half_count);
     {
         std::vector<uint32_t> fill(corner_start.begin(), corner_start.end() - 1);
-        for (uint32_t h = 0; h < half_count; ++h) corners[fill[from(h)]++] = h;
+        for (uint32_t h = 0; h < half_count; ++h)
+            corners[fill[from(h)]++] = h;
     }
     std::vector<uint32_t> parent(vertex_count);
     std::iota(parent.begin(), parent.end(), 0u);
@@ -130,15 +142,19 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     // Vertex manifoldness: the corners around each vertex form a single fan. The corner
     // whose outgoing half-edge is h continues across twin(h) to the corner whose
     // outgoing half-edge follows twin(h) in its triangle.
-    auto next_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 1) % 3; };
-    auto prev_in_tri = [](uint32_t h) { return h - h % 3 + (h % 3 + 2) % 3; };
+    auto next_in_tri = [](uint32_t h) {
+        return h - h % 3 + (h % 3 + 1) % 3;
+    };
+    auto prev_in_tri = [](uint32_t h) {
+        return h - h % 3 + (h % 3 + 2) % 3;
+    };
     uint32_t boundary_half = kNone;
     uint32_t boundary_count = 0;
     for (uint32_t v = 0; v < vertex_count; ++v) {
         uint32_t start = corners[corner_start[v]];
         uint32_t open_fans = 0;
         for (uint32_t c = corner_start[v]; c < corner_start[v + 1]; ++c) {
-            const uint32_t h = corners[c];  // outgoing from v
+            const uint32_t h = corners[c];        // outgoing from v
             if (twin[prev_in_tri(h)] == kNone) {  // incoming edge on the boundary
                 ++open_fans;
                 start = h;
@@ -155,25 +171,31 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
                 break;
             }
             h = next_in_tri(twin[h]);
-            if (h == start) break;
-            if (++visited > corner_start[v + 1] - corner_start[v]) break;
+            if (h == start)
+                break;
+            if (++visited > corner_start[v + 1] - corner_start[v])
+                break;
         }
         if (visited != corner_start[v + 1] - corner_start[v])
             return Fail(ParamStatus::kNonManifold,
                         fmt::format("vertex {} is pinched (its triangles form several fans)", v));
     }
-    if (boundary_count == 0) return Fail(ParamStatus::kNotDisc, "closed surface (no boundary)");
+    if (boundary_count == 0)
+        return Fail(ParamStatus::kNotDisc, "closed surface (no boundary)");
 
     // Boundary loops: each boundary vertex has one outgoing boundary half-edge.
     std::vector<uint32_t> boundary_out(vertex_count, kNone);
     for (uint32_t h = 0; h < half_count; ++h)
-        if (twin[h] == kNone) boundary_out[from(h)] = h;
+        if (twin[h] == kNone)
+            boundary_out[from(h)] = h;
     DiscCheck result;
     for (uint32_t h = boundary_half;;) {
         result.boundary.push_back(from(h));
         h = boundary_out[to(h)];
-        if (h == boundary_half) break;
-        if (result.boundary.size() > boundary_count) break;  // cannot happen once manifold
+        if (h == boundary_half)
+            break;
+        if (result.boundary.size() > boundary_count)
+            break;  // cannot happen once manifold
     }
     if (result.boundary.size() != boundary_count)
         return Fail(ParamStatus::kNotDisc,
@@ -182,9 +204,9 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     const int64_t edges = (int64_t(half_count) + boundary_count) / 2;
     const int64_t euler = int64_t(vertex_count) - edges + int64_t(tri_count);
     if (euler != 1)
-        return Fail(ParamStatus::kNotDisc,
-                    fmt::format("Euler characteristic {} (a disc has 1): the chart has handles",
-                                euler));
+        return Fail(
+            ParamStatus::kNotDisc,
+            fmt::format("Euler characteristic {} (a disc has 1): the chart has handles", euler));
     return result;
 }
 
@@ -197,8 +219,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
     double sum_3d = 0, sum_uv = 0;
     for (size_t t = 0; t < tri_count; ++t) {
         const auto& f = triangles[t];
-        flat[t] = FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]),
-                                  Vec3d(position[f[2]]));
+        flat[t] =
+            FlattenTriangle(Vec3d(position[f[0]]), Vec3d(position[f[1]]), Vec3d(position[f[2]]));
         const Vec3d p0(position[f[0]]);
         area_3d[t] = 0.5 * Length(Cross(Vec3d(position[f[1]]) - p0, Vec3d(position[f[2]]) - p0));
         const Vec2d q0(uv[f[0]].x, uv[f[0]].y), q1(uv[f[1]].x, uv[f[1]].y),
@@ -234,7 +256,8 @@ void MeasureDistortion(std::span<const Vec3f> position,
         }
         // Singular values of the 2x2 Jacobian J = [[a, b], [c, d]] (flat frame -> uv).
         const FlatTriangle& ft = flat[t];
-        if (ft.area == 0) continue;
+        if (ft.area == 0)
+            continue;
         double a = 0, b = 0, c = 0, d = 0;
         for (int j = 0; j < 3; ++j) {
             const Vec2f& p = uv[triangles[t][j]];
@@ -252,6 +275,21 @@ void MeasureDistortion(std::span<const Vec3f> position,
         m.conformal_max = std::max(m.conformal_max, ratio);
     }
     m.jacobian_deviation_mean = sum_3d > 0 ? misplaced / sum_3d : 0;
+    constexpr int kCells = 8;
+    std::array<double, kCells * kCells> cell_3d{}, cell_uv{};
+    for (size_t t = 0; t < tri_count; ++t) {
+        const auto& f = triangles[t];
+        const double cx = (double(uv[f[0]].x) + uv[f[1]].x + uv[f[2]].x) / 3;
+        const double cy = (double(uv[f[0]].y) + uv[f[1]].y + uv[f[2]].y) / 3;
+        const int ix = std::clamp(int(cx * kCells), 0, kCells - 1);
+        const int iy = std::clamp(int(cy * kCells), 0, kCells - 1);
+        cell_3d[iy * kCells + ix] += area_3d[t];
+        cell_uv[iy * kCells + ix] += s2 * area_uv[t];
+    }
+    double coarse = 0;
+    for (int c = 0; c < kCells * kCells; ++c)
+        coarse += std::abs(cell_3d[c] - cell_uv[c]);
+    m.jacobian_deviation_coarse = sum_3d > 0 ? coarse / sum_3d : 0;
     m.conformal_mean = conformal_weight > 0 ? conformal_sum / conformal_weight : 1;
     std::sort(weighted_dev.begin(), weighted_dev.end());
     m.jacobian_deviation_p95 = 0;
@@ -259,9 +297,104 @@ void MeasureDistortion(std::span<const Vec3f> position,
     for (const auto& [dev, w] : weighted_dev) {
         acc += w;
         m.jacobian_deviation_p95 = dev;
-        if (acc >= 0.95 * sum_3d) break;
+        if (acc >= 0.95 * sum_3d)
+            break;
     }
 }
+
+namespace {
+
+// A far-apart pair of boundary vertices (double sweep in 3D, ties to the first).
+std::pair<uint32_t, uint32_t> FarPair(const TriMesh& chart, std::span<const uint32_t> boundary) {
+    auto farthest = [&](uint32_t from) {
+        const Vec3d p(chart.position[from]);
+        uint32_t best = boundary[0];
+        double best_d = -1;
+        for (uint32_t v : boundary) {
+            const Vec3d e = Vec3d(chart.position[v]) - p;
+            if (Dot(e, e) > best_d) {
+                best_d = Dot(e, e);
+                best = v;
+            }
+        }
+        return best;
+    };
+    const uint32_t a = farthest(boundary[0]);
+    return {a, farthest(a)};
+}
+
+// Initial flattening (BFF or LSCM, with LSCM as BFF's fallback) and refinement. On
+// failure sets out->status and out->message.
+bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
+             std::span<const uint32_t> boundary, const ParamOptions& options,
+             std::vector<Vec2d>* uv, ChartParam* out) {
+    const uint32_t vertex_count = uint32_t(chart.vertex_count());
+    const auto [pin0, pin1] = FarPair(chart, boundary);
+    if (pin0 == pin1) {
+        out->status = ParamStatus::kDegenerate;
+        out->message = "all boundary vertices coincide";
+        return false;
+    }
+    auto lscm = [&] {
+        const double distance = Length(Vec3d(chart.position[pin1]) - Vec3d(chart.position[pin0]));
+        return SolveLscm(flat, chart.triangles, vertex_count, pin0, pin1, distance, uv);
+    };
+    bool ok = false;
+    if (options.init == ParamInit::kBff) {
+        ok = FlattenBff(chart.position, flat, chart.triangles, boundary, uv);
+        out->metrics.init = ok ? ParamInit::kBff : ParamInit::kLscm;
+    }
+    if (!ok) {
+        out->metrics.init = ParamInit::kLscm;
+        ok = lscm();
+    }
+    if (!ok) {
+        out->status = ParamStatus::kSolverFailed;
+        out->message = "the initial flattening failed";
+        return false;
+    }
+    out->metrics.init_flipped = CountFlips(*uv, chart.triangles);
+    if (!options.refine)
+        return true;
+
+    std::vector<char> fixed(vertex_count, 0);
+    fixed[pin0] = 1;
+    CotanLaplacian laplacian;
+    if (!laplacian.Factorize(flat, chart.triangles, fixed)) {
+        out->status = ParamStatus::kSolverFailed;
+        out->message = "Laplacian factorization failed";
+        return false;
+    }
+    ArapReport report =
+        RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
+    uint32_t flips = CountFlips(*uv, chart.triangles);
+    if (flips > 0 && out->metrics.init == ParamInit::kBff) {
+        // BFF's harmonic interior can fold on bad triangles; LSCM rarely does.
+        std::vector<Vec2d> bff_uv;
+        bff_uv.swap(*uv);
+        if (lscm()) {
+            const uint32_t lscm_flips = CountFlips(*uv, chart.triangles);
+            const ArapReport second =
+                RefineArap(flat, chart.triangles, laplacian, pin0, options.refine_options, uv);
+            const uint32_t second_flips = CountFlips(*uv, chart.triangles);
+            if (second_flips < flips) {
+                out->metrics.init = ParamInit::kLscm;
+                out->metrics.init_flipped = lscm_flips;
+                report = second;
+                flips = second_flips;
+            } else {
+                uv->swap(bff_uv);
+            }
+        } else {
+            uv->swap(bff_uv);
+        }
+    }
+    out->metrics.refine_iterations = report.iterations;
+    out->metrics.refine_stopped_by_flip = report.stopped_by_flip;
+    return true;
+}
+
+}  // namespace
 
 ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) {
     ChartParam out;
@@ -288,49 +421,17 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
 
     const std::vector<FlatTriangle> flat = FlattenTriangles(chart.position, chart.triangles);
     double total_area = 0;
-    for (const FlatTriangle& ft : flat) total_area += ft.area;
+    for (const FlatTriangle& ft : flat)
+        total_area += ft.area;
     if (!(total_area > 0)) {
         out.status = ParamStatus::kDegenerate;
         out.message = "all triangles are degenerate";
         return out;
     }
 
-    // Pins: a far-apart pair of boundary vertices (double sweep, ties to the first).
-    auto farthest = [&](uint32_t from) {
-        const Vec3d p(chart.position[from]);
-        uint32_t best = disc.boundary[0];
-        double best_d = -1;
-        for (uint32_t v : disc.boundary) {
-            const Vec3d e = Vec3d(chart.position[v]) - p;
-            if (Dot(e, e) > best_d) {
-                best_d = Dot(e, e);
-                best = v;
-            }
-        }
-        return best;
-    };
-    const uint32_t pin0 = farthest(disc.boundary[0]);
-    const uint32_t pin1 = farthest(pin0);
-    if (pin0 == pin1) {
-        out.status = ParamStatus::kDegenerate;
-        out.message = "all boundary vertices coincide";
-        return out;
-    }
-    const double pin_distance =
-        Length(Vec3d(chart.position[pin1]) - Vec3d(chart.position[pin0]));
-
     std::vector<Vec2d> uv;
-    if (!SolveLscm(flat, chart.triangles, vertex_count, pin0, pin1, pin_distance, &uv)) {
-        out.status = ParamStatus::kSolverFailed;
-        out.message = "LSCM factorization failed";
+    if (!Flatten(chart, flat, disc.boundary, options, &uv, &out))
         return out;
-    }
-    out.metrics.lscm_flipped = CountFlips(uv, chart.triangles);
-    if (options.arap) {
-        const ArapReport report = RefineArap(flat, chart.triangles, pin0, options.arap_options, &uv);
-        out.metrics.arap_iterations = report.iterations;
-        out.metrics.arap_stopped_by_flip = report.stopped_by_flip;
-    }
 
     const SquareFit fit = FitUnitSquare(uv, options.margin, options.objective);
     out.uv.resize(vertex_count);
@@ -340,17 +441,18 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
     }
     MeasureDistortion(chart.position, chart.triangles, out.uv, &out);
     std::vector<Vec2d> final_uv(vertex_count);
-    for (uint32_t v = 0; v < vertex_count; ++v) final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
+    for (uint32_t v = 0; v < vertex_count; ++v)
+        final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
     out.metrics.flipped = CountFlips(final_uv, chart.triangles);
 
     if (out.metrics.flipped > 0) {
         out.status = ParamStatus::kFlipped;
         out.message = fmt::format("{} flipped uv triangles", out.metrics.flipped);
-    } else if (out.metrics.jacobian_deviation_mean > options.max_jacobian_deviation) {
+    } else if (out.metrics.jacobian_deviation_coarse > options.max_jacobian_deviation) {
         out.status = ParamStatus::kDistorted;
-        out.message = fmt::format("Jacobian deviation {:.4f} > {:.4f}",
-                                  out.metrics.jacobian_deviation_mean,
-                                  options.max_jacobian_deviation);
+        out.message =
+            fmt::format("coarse Jacobian deviation {:.4f} > {:.4f}",
+                        out.metrics.jacobian_deviation_coarse, options.max_jacobian_deviation);
     } else {
         out.status = ParamStatus::kOk;
     }

@@ -7,28 +7,32 @@
 // end (a side flush with an edge). The calipers advance monotonically: O(hull) overall.
 #include "stream/square_fit.h"
 
+#include "core/check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include "core/check.h"
 
 namespace mebake::stream {
 
 std::vector<Vec2d> ConvexHull(std::span<const Vec2d> points) {
     std::vector<Vec2d> p(points.begin(), points.end());
-    std::sort(p.begin(), p.end(),
-              [](const Vec2d& a, const Vec2d& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+    std::sort(p.begin(), p.end(), [](const Vec2d& a, const Vec2d& b) {
+        return a.x < b.x || (a.x == b.x && a.y < b.y);
+    });
     p.erase(std::unique(p.begin(), p.end()), p.end());
-    if (p.size() < 3) return p;
+    if (p.size() < 3)
+        return p;
     std::vector<Vec2d> hull(2 * p.size());
     size_t k = 0;
     for (size_t i = 0; i < p.size(); ++i) {  // lower chain
-        while (k >= 2 && Cross(hull[k - 1] - hull[k - 2], p[i] - hull[k - 2]) <= 0) --k;
+        while (k >= 2 && Cross(hull[k - 1] - hull[k - 2], p[i] - hull[k - 2]) <= 0)
+            --k;
         hull[k++] = p[i];
     }
     for (size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
-        while (k >= lower && Cross(hull[k - 1] - hull[k - 2], p[i] - hull[k - 2]) <= 0) --k;
+        while (k >= lower && Cross(hull[k - 1] - hull[k - 2], p[i] - hull[k - 2]) <= 0)
+            --k;
         hull[k++] = p[i];
     }
     hull.resize(k - 1);  // the last point repeats the first
@@ -37,7 +41,9 @@ std::vector<Vec2d> ConvexHull(std::span<const Vec2d> points) {
 
 namespace {
 
-Vec2d Direction(double angle) { return {std::cos(angle), std::sin(angle)}; }
+Vec2d Direction(double angle) {
+    return {std::cos(angle), std::sin(angle)};
+}
 
 // Index of the hull point furthest along dir, climbing forward from `start`.
 size_t Support(const std::vector<Vec2d>& hull, size_t start, const Vec2d& dir) {
@@ -45,7 +51,8 @@ size_t Support(const std::vector<Vec2d>& hull, size_t start, const Vec2d& dir) {
     size_t j = start;
     for (size_t steps = 0; steps < n; ++steps) {
         const size_t next = (j + 1) % n;
-        if (Dot(hull[next] - hull[j], dir) <= 0) break;
+        if (Dot(hull[next] - hull[j], dir) <= 0)
+            break;
         j = next;
     }
     return j;
@@ -75,7 +82,8 @@ double BestAngle(const std::vector<Vec2d>& hull, SquareFitObjective objective) {
     for (size_t i = 0; i < n; ++i) {
         const Vec2d e = hull[(i + 1) % n] - hull[i];
         double a = std::fmod(std::atan2(e.y, e.x), kQuarter);
-        if (a < 0) a += kQuarter;
+        if (a < 0)
+            a += kQuarter;
         critical.push_back(a);
     }
     std::sort(critical.begin(), critical.end());
@@ -95,30 +103,40 @@ double BestAngle(const std::vector<Vec2d>& hull, SquareFitObjective objective) {
         for (int k = 0; k < 4; ++k) {
             size_t arg = 0;
             for (size_t i = 1; i < n; ++i)
-                if (Dot(hull[i], dirs[k]) > Dot(hull[arg], dirs[k])) arg = i;
+                if (Dot(hull[i], dirs[k]) > Dot(hull[arg], dirs[k]))
+                    arg = i;
             sup[k] = arg;
         }
     }
     for (size_t k = 0; k + 1 < critical.size(); ++k) {
         const double a0 = critical[k], a1 = critical[k + 1];
-        if (!(a1 > a0)) continue;
+        if (!(a1 > a0))
+            continue;
         const Vec2d d = Direction(0.5 * (a0 + a1));
         const Vec2d dirs[4] = {d, d * -1.0, {-d.y, d.x}, {d.y, -d.x}};
-        for (int c = 0; c < 4; ++c) sup[c] = Support(hull, sup[c], dirs[c]);
+        for (int c = 0; c < 4; ++c)
+            sup[c] = Support(hull, sup[c], dirs[c]);
         // width(a) = W . (cos a, sin a), height(a) = H . (-sin a, cos a).
         const Vec2d w_vec = hull[sup[0]] - hull[sup[1]];
         const Vec2d h_vec = hull[sup[2]] - hull[sup[3]];
-        auto width = [&](double a) { return Dot(w_vec, Direction(a)); };
-        auto height = [&](double a) { return Dot(h_vec, Vec2d(-std::sin(a), std::cos(a))); };
+        auto width = [&](double a) {
+            return Dot(w_vec, Direction(a));
+        };
+        auto height = [&](double a) {
+            return Dot(h_vec, Vec2d(-std::sin(a), std::cos(a)));
+        };
         double candidates[3] = {a0, a1, a0};
         int count = 2;
         if (objective == SquareFitObjective::kMinLongerSide) {
             // width - height = P cos a + Q sin a = 0.
             const double p = w_vec.x - h_vec.y, q = w_vec.y + h_vec.x;
             double a = std::atan2(-p, q);
-            while (a < a0) a += std::numbers::pi;
-            while (a - std::numbers::pi >= a0) a -= std::numbers::pi;
-            if (a < a1) candidates[count++] = a;
+            while (a < a0)
+                a += std::numbers::pi;
+            while (a - std::numbers::pi >= a0)
+                a -= std::numbers::pi;
+            if (a < a1)
+                candidates[count++] = a;
         }
         for (int c = 0; c < count; ++c) {
             const double s = score(width(candidates[c]), height(candidates[c]));
@@ -166,7 +184,8 @@ SquareFit FitUnitSquare(std::span<const Vec2d> points, double margin,
         lo_y = std::min(lo_y, q.y);
         hi_y = std::max(hi_y, q.y);
     }
-    fit.offset = Vec2d(0.5 - 0.5 * (lo_x + hi_x) * fit.scale, 0.5 - 0.5 * (lo_y + hi_y) * fit.scale);
+    fit.offset =
+        Vec2d(0.5 - 0.5 * (lo_x + hi_x) * fit.scale, 0.5 - 0.5 * (lo_y + hi_y) * fit.scale);
     return fit;
 }
 

@@ -4,10 +4,10 @@
 // (Toussaint, "Solving geometric problems with the rotating calipers", 1983).
 #pragma once
 
+#include "core/vec.h"
+
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 

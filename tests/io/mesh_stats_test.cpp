@@ -15,6 +15,9 @@
 namespace mebake::io {
 namespace {
 
+// The sink's spill block (1024 positions): cache sizes below are counted in these.
+constexpr size_t kSlot = size_t(12) << 10;
+
 // A mesh held whole, fed to a sink in chosen batch sizes and orders, like a reader would.
 struct TestMesh {
     std::vector<Vec3f> positions;
@@ -201,7 +204,7 @@ protected:
 };
 
 TEST_F(MeshStatsSpill, TinyCacheMatchesLargeCache) {
-    // 200 x 150 = 30000 vertices: 8 spill blocks of 4096; 2 cache slots force evictions.
+    // 200 x 150 = 30000 vertices: 30 spill blocks; 2 cache slots force evictions.
     TestMesh m = Grid(200, 150);
     Shuffle(m.faces);
     m.faces.push_back({0, 1, 2});       // collinear along the first row
@@ -209,7 +212,7 @@ TEST_F(MeshStatsSpill, TinyCacheMatchesLargeCache) {
     m.positions.push_back({-3, 7, 2});  // unreferenced
     MeshStats big = CollectStats(m, size_t(1) << 30, 4096, 65536, dir_.string());
     MeshStats tiny = CollectStats(m, 1, 1000, 777, dir_.string());
-    MeshStats mid = CollectStats(m, 5 * 49152, 65536, 1 << 12, dir_.string());
+    MeshStats mid = CollectStats(m, 5 * kSlot, 65536, 1 << 12, dir_.string());
     ExpectSame(big, tiny);
     ExpectSame(big, mid);
     EXPECT_EQ(big.triangles, uint64_t(2 * 199 * 149 + 2));
@@ -224,15 +227,15 @@ TEST_F(MeshStatsSpill, TinyCacheMatchesLargeCache) {
 // Faces in file order touch two or three blocks per batch: the prefetch path, loading
 // runs of blocks and pinning them while the cache evicts.
 TEST_F(MeshStatsSpill, PrefetchPathWithEviction) {
-    TestMesh m = Grid(300, 200);  // 60000 vertices, 15 blocks
+    TestMesh m = Grid(300, 200);  // 60000 vertices, 59 blocks
     // Each batch also names vertex 0 and the last one, so the pinned set spans the spill.
     for (size_t f = 0; f < m.faces.size(); f += 5000)
         m.faces[f] = {0, 59999, 30000};
     MeshStats ref = CollectStats(m, size_t(1) << 30, 65536, 65536, dir_.string());
-    for (size_t slots : {2, 3, 4, 6, 8}) {
+    for (size_t slots : {2, 4, 6, 8, 12, 16}) {
         for (size_t batch : {300, 1000, 2999, 5000}) {
             SCOPED_TRACE(testing::Message() << slots << " slots, face batch " << batch);
-            ExpectSame(ref, CollectStats(m, slots * 49152, 7000, batch, dir_.string()));
+            ExpectSame(ref, CollectStats(m, slots * kSlot, 7000, batch, dir_.string()));
         }
     }
 }
@@ -253,7 +256,7 @@ TEST_F(MeshStatsSpill, FacesFirstWithSpill) {
 TEST_F(MeshStatsSpill, InterleavedLikeObj) {
     TestMesh m = Grid(100, 100);
     MeshStats ref = CollectStats(m, size_t(1) << 30, 65536, 65536, dir_.string());
-    MeshStatsSink sink(dir_.string(), 3 * 49152);
+    MeshStatsSink sink(dir_.string(), 3 * kSlot);
     sink.Begin(m.Header());
     VertexBatch vb;
     size_t next_face = 0;
@@ -283,7 +286,7 @@ TEST_F(MeshStatsSpill, DeferredFaceNamingMissingVertexIsAnInputError) {
 }
 
 TEST(MeshStats, UnwritableTempDirIsAnIoError) {
-    TestMesh m = Grid(100, 50);  // 5000 vertices: one full block spills
+    TestMesh m = Grid(100, 50);  // 5000 vertices: full blocks spill
     MeshStatsSink sink("/nonexistent/mebake-stats-dir");
     sink.Begin(m.Header());
     try {

@@ -271,6 +271,30 @@ TEST(Visibility, RandomSoupAgreesWithBruteForce) {
     }
 }
 
+TEST(Visibility, SharedBuffersGiveTheSameAnswers) {
+    Soup soup = RandomSoup(3000, 71);
+    const size_t nv = soup.p.size() / 3;
+    const std::vector<Segment> segs = RandomSegments(5000, 72);
+    VisibilityScene copied;
+    copied.AddTriangles(soup.p, soup.t);
+    copied.Commit();
+    std::vector<float> padded = soup.p;
+    EXPECT_THROW(VisibilityScene().AddTrianglesShared(padded, nv, soup.t), Error);  // no spare
+    padded.push_back(0.0f);
+    const int64_t before = EmbreeMemoryBytes();
+    VisibilityScene shared;
+    EXPECT_EQ(shared.AddTrianglesShared(padded, nv, soup.t), 0u);
+    shared.Commit();
+    // The BVH is counted, the shared arrays are not.
+    EXPECT_GT(EmbreeMemoryBytes(), before);
+    std::vector<uint8_t> a(segs.size()), b(segs.size());
+    copied.Occluded(segs, a);
+    shared.Occluded(segs, b);
+    EXPECT_EQ(a, b);
+    std::vector<uint32_t> bad = {0, 1, uint32_t(nv)};
+    EXPECT_THROW(VisibilityScene().AddTrianglesShared(padded, nv, bad), Error);
+}
+
 TEST(Visibility, ConcurrentQueriesMatchSerial) {
     const Soup soup = RandomSoup(20000, 31);
     const std::vector<Segment> segs = RandomSegments(50000, 32);
@@ -330,28 +354,72 @@ TEST(Visibility, MemoryIsCountedAndCanBeCapped) {
     scene.Occluded(segs, occ);
 }
 
+struct HeightField {
+    std::vector<float> p;
+    std::vector<uint32_t> t;
+    static float Height(float x, float y) {
+        return 0.05f * std::sin(40 * x) * std::cos(37 * y) + 0.1f * std::sin(7 * x + 3 * y);
+    }
+    explicit HeightField(int n) {
+        for (int j = 0; j <= n; ++j) {
+            for (int i = 0; i <= n; ++i) {
+                const float x = float(i) / n, y = float(j) / n;
+                p.insert(p.end(), {x, y, Height(x, y)});
+            }
+        }
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1),
+                               d = c + 1;
+                t.insert(t.end(), {a, b, d, a, d, c});
+            }
+        }
+    }
+};
+
+TEST(Visibility, CoherentBundlesDoNotHangAndAgree) {
+    // Bundles of 256 segments between two 0.02-wide patches: with the coherent context flag
+    // Embree's rtcOccluded16 never returned on this input, so the wrapper gives that flag to
+    // the stream API only. Every method and flag must agree.
+    const HeightField field(300);
+    std::mt19937 rng(61);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<Segment> segs(4096);
+    float px = 0, py = 0, qx = 0, qy = 0;
+    for (size_t i = 0; i < segs.size(); ++i) {
+        if (i % 256 == 0) {
+            px = 0.98f * u(rng), py = 0.98f * u(rng), qx = 0.98f * u(rng), qy = 0.98f * u(rng);
+        }
+        const float x0 = px + 0.02f * u(rng), y0 = py + 0.02f * u(rng);
+        const float x1 = qx + 0.02f * u(rng), y1 = qy + 0.02f * u(rng);
+        segs[i] = Seg({x0, y0, HeightField::Height(x0, y0) + 0.01f},
+                      {x1, y1, HeightField::Height(x1, y1) + 0.01f});
+    }
+    std::vector<uint8_t> first;
+    for (TraceMethod m : kMethods) {
+        for (bool coherent : {false, true}) {
+            VisibilityOptions opt;
+            opt.method = m;
+            opt.coherent = coherent;
+            VisibilityScene scene(opt);
+            scene.AddTriangles(field.p, field.t);
+            scene.Commit();
+            std::vector<uint8_t> occ(segs.size());
+            scene.Occluded(segs, occ);
+            if (first.empty())
+                first = occ;
+            EXPECT_EQ(occ, first) << "method " << int(m) << " coherent " << coherent;
+        }
+    }
+}
+
 TEST(Visibility, RayRateOnABumpyHeightField) {
     // A 300 x 300 x 2 = 180K-triangle height field; segments between points just above it.
     // (The full-size measurement, ~1M triangles, is bench/embree_rate_bench.cpp.)
-    const int n = 300;
-    std::vector<float> p;
-    std::vector<uint32_t> t;
-    auto height = [](float x, float y) {
-        return 0.05f * std::sin(40 * x) * std::cos(37 * y) + 0.1f * std::sin(7 * x + 3 * y);
-    };
-    for (int j = 0; j <= n; ++j) {
-        for (int i = 0; i <= n; ++i) {
-            const float x = float(i) / n, y = float(j) / n;
-            p.insert(p.end(), {x, y, height(x, y)});
-        }
-    }
-    for (int j = 0; j < n; ++j) {
-        for (int i = 0; i < n; ++i) {
-            const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1),
-                           d = c + 1;
-            t.insert(t.end(), {a, b, d, a, d, c});
-        }
-    }
+    const HeightField field(300);
+    const auto& p = field.p;
+    const auto& t = field.t;
+    auto height = HeightField::Height;
     std::mt19937 rng(51);
     std::uniform_real_distribution<float> u(0, 1);
     std::vector<Segment> segs(200000);
