@@ -34,10 +34,11 @@ Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
 
 }  // namespace
 
-Camera DefaultCamera(const BakeView& view, int width, int height) {
+Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
     Camera cam;
     cam.width = width;
     cam.height = height;
+    cam.fov = fov > 0 && fov < 180 ? fov : 50;
     const Vec3d lo = view.manifest.bbox_min, hi = view.manifest.bbox_max;
     const Vec3d center = (lo + hi) * 0.5;
     const double radius = std::max(0.5 * Length(hi - lo), 1e-9);

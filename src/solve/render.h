@@ -48,8 +48,8 @@ struct RenderedImage {
     }
 };
 
-// Camera placed to see the whole bounding box from the front-right-above (for quick looks).
-Camera DefaultCamera(const BakeView& view, int width, int height);
+// A camera that sees the whole bounding box from the front-right-above (quick looks).
+Camera DefaultCamera(const BakeView& view, int width, int height, double fov = 50);
 
 // Throws Error(Usage) for a degenerate camera (eye = target, up parallel to the view,
 // fov outside (0, 180), size outside [1, 16384]).
