@@ -9,6 +9,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <half.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -87,6 +88,7 @@ struct ExrWriter::Impl {
     std::unique_ptr<FdOStream> stream;
     std::unique_ptr<Imf::OutputFile> file;
     std::vector<float> scratch;
+    std::vector<Imath::half> half_scratch;
     int rows = 0;
     bool committed = false;
 
@@ -164,18 +166,29 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     const size_t nc = m.channels.size();
     CHECK_EQ(pixels.size(), size_t(rows) * size_t(m.width) * nc);
     if (rows == 0) return;
-    m.scratch.assign(pixels.begin(), pixels.end());
+    // OpenEXR does not convert between a slice's type and the file's when writing.
     const bool half = m.options.type == ExrPixelType::Half;
-    for (float& v : m.scratch) {
-        CHECK(std::isfinite(v));
-        if (half) v = std::clamp(v, -kHalfMax, kHalfMax);
+    const size_t elem = half ? sizeof(Imath::half) : sizeof(float);
+    char* data;
+    if (half) {
+        m.half_scratch.resize(pixels.size());
+        for (size_t i = 0; i < pixels.size(); ++i) {
+            CHECK(std::isfinite(pixels[i]));
+            m.half_scratch[i] = Imath::half(std::clamp(pixels[i], -kHalfMax, kHalfMax));
+        }
+        data = reinterpret_cast<char*>(m.half_scratch.data());
+    } else {
+        m.scratch.assign(pixels.begin(), pixels.end());
+        for (float v : m.scratch) CHECK(std::isfinite(v));
+        data = reinterpret_cast<char*>(m.scratch.data());
     }
-    const size_t xs = nc * sizeof(float), ys = xs * size_t(m.width);
+    const size_t xs = nc * elem, ys = xs * size_t(m.width);
     // OpenEXR addresses pixel (x, y) at base + x * xs + y * ys with y the absolute row.
-    char* origin = reinterpret_cast<char*>(m.scratch.data()) - ptrdiff_t(size_t(m.rows) * ys);
+    char* origin = data - ptrdiff_t(size_t(m.rows) * ys);
+    const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
     Imf::FrameBuffer fb;
     for (size_t k = 0; k < nc; ++k)
-        fb.insert(m.channels[k], Imf::Slice(Imf::FLOAT, origin + k * sizeof(float), xs, ys));
+        fb.insert(m.channels[k], Imf::Slice(type, origin + k * elem, xs, ys));
     try {
         m.file->setFrameBuffer(fb);
         m.file->writePixels(rows);
