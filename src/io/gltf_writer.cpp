@@ -225,17 +225,20 @@ void GlbWriter::Finish(OutputStream& out) {
         views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", mat.png.size()}});
         offset = Pad4(offset + mat.png.size());
     }
-    auto add_view = [&](uint64_t bytes, uint32_t target) -> int64_t {
+    // Several primitives' accessors share a vertex view, which glTF allows only with an
+    // explicit byteStride (index views must not have one).
+    auto add_view = [&](uint64_t bytes, uint32_t target, uint32_t stride) -> int64_t {
         if (bytes == 0) return -1;
-        views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes},
-                         {"target", target}});
+        json v = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}};
+        if (stride) v["byteStride"] = stride;
+        views.push_back(v);
         offset = Pad4(offset + bytes);
         return int64_t(views.size() - 1);
     };
-    const int64_t v_pos = add_view(m.positions->size(), kArrayBuffer);
-    const int64_t v_nrm = add_view(m.normals->size(), kArrayBuffer);
-    const int64_t v_uv = add_view(m.uvs->size(), kArrayBuffer);
-    const int64_t v_idx = add_view(m.indices->size(), kElementArrayBuffer);
+    const int64_t v_pos = add_view(m.positions->size(), kArrayBuffer, 12);
+    const int64_t v_nrm = add_view(m.normals->size(), kArrayBuffer, 12);
+    const int64_t v_uv = add_view(m.uvs->size(), kArrayBuffer, 8);
+    const int64_t v_idx = add_view(m.indices->size(), kElementArrayBuffer, 0);
     const uint64_t bin_bytes = offset;
 
     json prims = json::array();
