@@ -15,7 +15,8 @@ namespace mebake::solve {
 
 namespace {
 
-constexpr float kInvPi = float(1.0 / std::numbers::pi);
+// Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
+constexpr float kPi = float(std::numbers::pi);
 
 std::string Extension(const std::string& path) {
     std::string e = std::filesystem::path(path).extension().string();
@@ -153,7 +154,7 @@ void ToneMapBand(std::span<const float> pixels, const ToneMap& tone, std::vector
     ParallelForRange(0, int64_t(texels), [&](int64_t lo, int64_t hi) {
         for (int64_t t = lo; t < hi; ++t) {
             const float* p = &pixels[size_t(t) * 4];
-            ToneMapPixel(Vec3f(p[0], p[1], p[2]) * kInvPi, tone, &out[size_t(t) * 3]);
+            ToneMapPixel(Vec3f(p[0], p[1], p[2]) / kPi, tone, &out[size_t(t) * 3]);
         }
     }, 4096);
 }

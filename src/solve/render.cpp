@@ -17,7 +17,8 @@ namespace mebake::solve {
 
 namespace {
 
-constexpr float kInvPi = float(1.0 / std::numbers::pi);
+// Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
+constexpr float kPi = float(std::numbers::pi);
 
 Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
     switch (sky.type) {
@@ -134,7 +135,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 ++count;
                 const ChartShader& sh = *shaders[geom_chart[h.geom_id]];
                 const ShadingPoint p = sh.AtTriangle(h.prim_id, 1 - h.u - h.v, h.u, h.v);
-                sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) * kInvPi;
+                sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) / kPi;
             }
             float* out = &img.rgb[(size_t(py) * size_t(cam.width) + size_t(px)) * 3];
             for (int c = 0; c < 3; ++c) out[c] = sum[c] * weight;

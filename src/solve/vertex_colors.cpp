@@ -21,7 +21,8 @@ namespace mebake::solve {
 
 namespace {
 
-constexpr float kInvPi = float(1.0 / std::numbers::pi);
+// Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
+constexpr float kPi = float(std::numbers::pi);
 constexpr size_t kBatch = size_t(1) << 16;
 
 // Running sum of a vertex's copies.
@@ -140,7 +141,7 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
             const Accum a = accum->Get(first + k);
             Vec3f radiance{};
             if (a.count > 0) {
-                radiance = Vec3f(a.r, a.g, a.b) * (kInvPi / float(a.count));
+                radiance = Vec3f(a.r, a.g, a.b) / float(a.count) / kPi;
                 ++st.referenced;
                 if (a.count > 1) ++st.shared;
             }
