@@ -91,6 +91,7 @@ int RunExport(const ExportCommand& c) {
     solve::AtlasOptions ao;
     ao.max_size = c.max_atlas;
     ao.gutter = c.gutter;
+    ao.power_of_two = !c.npot;
     const solve::Atlas atlas = solve::PackAtlas(solve::ChartResolutions(view), ao);
     const uint32_t pages = uint32_t(atlas.pages.size());
     for (uint32_t p = 0; p < pages; ++p) {

@@ -18,6 +18,7 @@ struct ExportCommand {
     std::string stats;            // JSON statistics (atlas, outputs, seam metric), or "-"
     uint32_t max_atlas = 8192;    // largest atlas page side (power of two)
     uint32_t gutter = 2;          // texels around each chart
+    bool npot = false;            // atlas pages of any multiple of 4 (default powers of two)
     double exposure = 0;          // EV, for tone-mapped outputs
     std::string tonemap = "filmic";  // filmic, reinhard, clamp
     bool float_output = false;    // EXR as float (not half); PLY colours as linear float

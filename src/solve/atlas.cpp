@@ -1,6 +1,7 @@
 #include "solve/atlas.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "core/check.h"
@@ -15,6 +16,8 @@ uint32_t NextPow2(uint64_t n) {
     while (p < n) p <<= 1;
     return uint32_t(p);
 }
+
+uint32_t RoundUp4(uint64_t n) { return uint32_t((n + 3) & ~uint64_t(3)); }
 
 struct Placement {
     uint32_t x, y;
@@ -104,12 +107,25 @@ Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& opt) 
         uint64_t area = 0;
         for (size_t k = first; k < n; ++k) area += uint64_t(blocks[order[k]]) * blocks[order[k]];
         uint32_t best_w = 0, best_h = 0;
-        for (uint32_t w = NextPow2(blocks[order[first]]); w <= opt.max_size; w *= 2) {
+        const uint32_t largest = blocks[order[first]];
+        std::vector<uint32_t> widths;
+        if (opt.power_of_two) {
+            for (uint32_t w = NextPow2(largest); w <= opt.max_size; w *= 2) widths.push_back(w);
+        } else {
+            // Widths holding k of the largest blocks per shelf, from a little under the
+            // square root of the area on (narrower pages cannot be smaller); 64 at most.
+            const uint64_t k0 = std::max<uint64_t>(
+                1, uint64_t(0.7 * std::sqrt(double(area)) / largest));
+            for (uint64_t k = k0; k < k0 + 64 && RoundUp4(k * largest) <= opt.max_size; ++k)
+                widths.push_back(RoundUp4(k * largest));
+            if (widths.empty() || widths.back() != opt.max_size) widths.push_back(opt.max_size);
+        }
+        for (uint32_t w : widths) {
             if (uint64_t(w) * opt.max_size < area) continue;
             uint32_t used = 0;
             if (Simulate(order, first, blocks, w, opt.max_size, &used, nullptr) != n - first)
                 continue;
-            const uint32_t h = NextPow2(used);
+            const uint32_t h = opt.power_of_two ? NextPow2(used) : RoundUp4(used);
             const uint64_t a = uint64_t(w) * h, best = uint64_t(best_w) * best_h;
             if (best_w == 0 || a < best || (a == best && std::max(w, h) < std::max(best_w, best_h)))
                 best_w = w, best_h = h;

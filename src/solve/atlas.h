@@ -5,9 +5,14 @@
 // a neighbour.
 //
 // Deterministic: charts are placed by decreasing block size, ties by chart id. A page is
-// at most `max_size` texels per side; its width and height are each the smallest power of
-// two that holds what it got (the width tried from the smallest that could hold the
-// remaining charts up to max_size, keeping the smallest page that takes them all).
+// at most `max_size` texels per side. Its width is chosen among candidates (powers of two,
+// or with power_of_two = false the multiples of 4 that hold a whole number of the largest
+// blocks) as the one giving the smallest page that takes all remaining charts; its height
+// is then the smallest power of two (or multiple of 4) that holds them. When no page takes
+// them all, a full max_size page is filled and packing goes on with the next one.
+// Power-of-two chart squares plus gutters fit power-of-two pages poorly (8 charts of 512
+// fill a 2048 page to 50%, a 1548 one to 88%): power_of_two = false trades mipmap-friendly
+// sizes for that space.
 //
 // Coordinates: texel (x, y) of a page, y counted from the image's top row (the first row
 // written to EXR/PNG). A chart's texel (i, j) of its square (i along u, j along v) is
@@ -28,6 +33,7 @@ namespace mebake::solve {
 struct AtlasOptions {
     uint32_t max_size = 8192;  // largest page side, texels
     uint32_t gutter = 2;       // texels on each side of a chart's square
+    bool power_of_two = true;  // page sides powers of two (else multiples of 4)
 };
 
 struct AtlasChart {

@@ -27,7 +27,11 @@ bool IsPow2(uint32_t x) { return x && !(x & (x - 1)); }
 void ExpectValid(const Atlas& a, std::span<const uint32_t> res, const AtlasOptions& opt) {
     ASSERT_EQ(a.charts.size(), res.size());
     for (const auto& p : a.pages) {
-        EXPECT_TRUE(IsPow2(p.width) && IsPow2(p.height)) << p.width << "x" << p.height;
+        if (opt.power_of_two) {
+            EXPECT_TRUE(IsPow2(p.width) && IsPow2(p.height)) << p.width << "x" << p.height;
+        } else {
+            EXPECT_TRUE(p.width % 4 == 0 && p.height % 4 == 0) << p.width << "x" << p.height;
+        }
         EXPECT_LE(p.width, opt.max_size);
         EXPECT_LE(p.height, opt.max_size);
     }
@@ -104,6 +108,24 @@ TEST(Atlas, SmallestPowerOfTwoPage) {
     const Atlas b = PackAtlas(four, opt);
     ASSERT_EQ(b.pages.size(), 1u);
     EXPECT_EQ(uint64_t(b.pages[0].width) * b.pages[0].height, 128u * 128u);
+}
+
+TEST(Atlas, MultipleOfFourPagesFillBetter) {
+    AtlasOptions opt;
+    opt.gutter = 2;
+    const std::vector<uint32_t> res(8, 512);  // 516-texel blocks
+    const Atlas pow2 = PackAtlas(res, opt);
+    opt.power_of_two = false;
+    const Atlas npot = PackAtlas(res, opt);
+    ExpectValid(npot, res, opt);
+    ASSERT_EQ(npot.pages.size(), 1u);
+    EXPECT_EQ(npot.pages[0].width % 4, 0u);
+    EXPECT_EQ(npot.pages[0].height % 4, 0u);
+    EXPECT_LT(npot.texels(), pow2.texels());
+    EXPECT_GT(npot.fill(), 0.8);
+    const auto rnd = RandomResolutions(500, 3);
+    opt.max_size = 2048;
+    ExpectValid(PackAtlas(rnd, opt), rnd, opt);
 }
 
 TEST(Atlas, LargerChartsFirstTiesById) {
