@@ -1,12 +1,4 @@
 // `mebake export` and `mebake render`: option checks and calls into solve/, nothing else.
-#include <nlohmann/json.hpp>
-
-#include <chrono>
-#include <cstdio>
-#include <filesystem>
-#include <cmath>
-#include <numbers>
-
 #include "app/export_commands.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -22,6 +14,13 @@
 #include "solve/tonemap.h"
 #include "solve/vertex_colors.h"
 
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
 namespace mebake::app {
 
 namespace {
@@ -34,28 +33,35 @@ double Since(Clock::time_point t) {
 
 // Nothing the user already had is overwritten unless asked.
 void CheckFresh(const std::string& path, bool force) {
-    if (path.empty() || path == "-" || force) return;
+    if (path.empty() || path == "-" || force)
+        return;
     if (std::filesystem::exists(path))
         UsageError("{} exists; use --force to overwrite it", path);
 }
 
 solve::ToneMap ParseTone(double exposure, const std::string& curve) {
     auto c = solve::ParseToneCurve(curve);
-    if (!c) UsageError("--tonemap '{}': expected filmic, reinhard or clamp", curve);
+    if (!c)
+        UsageError("--tonemap '{}': expected filmic, reinhard or clamp", curve);
     return solve::ToneMap{float(exposure), *c};
 }
 
 io::ExrCompression ParseCompression(const std::string& s) {
-    if (s == "zip") return io::ExrCompression::Zip;
-    if (s == "piz") return io::ExrCompression::Piz;
-    if (s == "none") return io::ExrCompression::None;
+    if (s == "zip")
+        return io::ExrCompression::Zip;
+    if (s == "piz")
+        return io::ExrCompression::Piz;
+    if (s == "none")
+        return io::ExrCompression::None;
     UsageError("--compression '{}': expected zip, piz or none", s);
 }
 
 Vec3d ToVec3(const std::vector<double>& v, const char* option) {
-    if (v.size() != 3) UsageError("{}: expected three numbers", option);
+    if (v.size() != 3)
+        UsageError("{}: expected three numbers", option);
     for (double x : v)
-        if (!std::isfinite(x)) UsageError("{}: not a finite number", option);
+        if (!std::isfinite(x))
+            UsageError("{}: not a finite number", option);
     return Vec3d(v[0], v[1], v[2]);
 }
 
@@ -80,7 +86,8 @@ int RunExport(const ExportCommand& c) {
     if (given == 0)
         UsageError("nothing to export: give --lightmap, --irradiance, --mesh, --vertex-colors "
                    "or --stats");
-    if (to_stdout > 1) UsageError("only one output can go to stdout ('-')");
+    if (to_stdout > 1)
+        UsageError("only one output can go to stdout ('-')");
     const solve::ToneMap tone = ParseTone(c.exposure, c.tonemap);
     solve::MapWriteOptions mo;
     mo.exr_type = c.float_output ? io::ExrPixelType::Float : io::ExrPixelType::Half;
@@ -95,10 +102,13 @@ int RunExport(const ExportCommand& c) {
     const solve::Atlas atlas = solve::PackAtlas(solve::ChartResolutions(view), ao);
     const uint32_t pages = uint32_t(atlas.pages.size());
     for (uint32_t p = 0; p < pages; ++p) {
-        if (!c.lightmap.empty()) CheckFresh(solve::PagePath(c.lightmap, p, pages), c.force);
-        if (!c.irradiance.empty()) CheckFresh(solve::PagePath(c.irradiance, p, pages), c.force);
+        if (!c.lightmap.empty())
+            CheckFresh(solve::PagePath(c.lightmap, p, pages), c.force);
+        if (!c.irradiance.empty())
+            CheckFresh(solve::PagePath(c.irradiance, p, pages), c.force);
     }
-    for (const auto& o : {c.mesh, c.vertex_colors, c.stats}) CheckFresh(o, c.force);
+    for (const auto& o : {c.mesh, c.vertex_colors, c.stats})
+        CheckFresh(o, c.force);
     spdlog::info("{} charts in {} atlas page{} ({} texels, {:.1f}% filled)", view.chart_count(),
                  pages, pages == 1 ? "" : "s", FormatCount(double(atlas.texels())),
                  100 * atlas.fill());
@@ -107,15 +117,19 @@ int RunExport(const ExportCommand& c) {
     j["charts"] = view.chart_count();
     j["unknown"] = view.solution.radiosity ? "radiosity" : "irradiance";
     nlohmann::json jp = nlohmann::json::array();
-    for (const auto& p : atlas.pages) jp.push_back({{"width", p.width}, {"height", p.height}});
-    j["atlas"] = {{"pages", jp}, {"gutter", atlas.gutter}, {"texels", atlas.texels()},
+    for (const auto& p : atlas.pages)
+        jp.push_back({{"width", p.width}, {"height", p.height}});
+    j["atlas"] = {{"pages", jp},
+                  {"gutter", atlas.gutter},
+                  {"texels", atlas.texels()},
                   {"fill", atlas.fill()}};
     j["tone_map"] = {{"exposure", tone.exposure}, {"curve", c.tonemap}};
     nlohmann::json seconds = nlohmann::json::object();
 
     if (!c.lightmap.empty()) {
         auto t = Clock::now();
-        auto files = solve::WriteMapPages(view, atlas, c.lightmap, solve::MapContent::Radiosity, mo);
+        auto files =
+            solve::WriteMapPages(view, atlas, c.lightmap, solve::MapContent::Radiosity, mo);
         seconds["lightmap"] = Since(t);
         j["lightmap"] = files;
         spdlog::info("light map: {} ({})", fmt::join(files, ", "), FormatSeconds(Since(t)));
@@ -147,9 +161,10 @@ int RunExport(const ExportCommand& c) {
         vo.float_colors = c.float_output;
         auto st = solve::WriteVertexColors(view, c.vertex_colors, vo);
         seconds["vertex_colors"] = Since(t);
-        j["vertex_colors"] = {{"path", c.vertex_colors}, {"vertices", st.vertices},
-                              {"referenced", st.referenced}, {"shared", st.shared},
-                              {"faces", st.faces}, {"hole_fill_faces_dropped", st.hole_fill_faces}};
+        j["vertex_colors"] = {
+            {"path", c.vertex_colors},     {"vertices", st.vertices},
+            {"referenced", st.referenced}, {"shared", st.shared},
+            {"faces", st.faces},           {"hole_fill_faces_dropped", st.hole_fill_faces}};
         spdlog::info("vertex colours: {} ({} vertices, {} faces, {})", c.vertex_colors,
                      FormatCount(double(st.vertices)), FormatCount(double(st.faces)),
                      FormatSeconds(Since(t)));
@@ -158,9 +173,12 @@ int RunExport(const ExportCommand& c) {
         auto t = Clock::now();
         const solve::SeamStats s = solve::MeasureSeams(view);
         seconds["seams"] = Since(t);
-        j["seams"] = {{"edges", s.seam_edges},          {"open_edges", s.open_edges},
-                      {"samples", s.samples},           {"mean_relative_jump", s.mean_relative},
-                      {"p95_relative_jump", s.p95_relative}, {"max_relative_jump", s.max_relative},
+        j["seams"] = {{"edges", s.seam_edges},
+                      {"open_edges", s.open_edges},
+                      {"samples", s.samples},
+                      {"mean_relative_jump", s.mean_relative},
+                      {"p95_relative_jump", s.p95_relative},
+                      {"max_relative_jump", s.max_relative},
                       {"mean_level", s.mean_level},
                       {"worst_edge", {s.worst_v0, s.worst_v1}}};
         spdlog::info("seams: {} edges, relative jump mean {:.3g}, p95 {:.3g}, max {:.3g}",
@@ -169,7 +187,8 @@ int RunExport(const ExportCommand& c) {
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;
     j["peak_rss_bytes"] = PeakRssBytes();
-    if (!c.stats.empty()) WriteJson(c.stats, j);
+    if (!c.stats.empty())
+        WriteJson(c.stats, j);
     return 0;
 }
 
@@ -179,7 +198,8 @@ int RunRender(const RenderCommand& c) {
     int w = 0, h = 0;
     {
         char x = 0, extra = 0;
-        if (std::sscanf(c.size.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X'))
+        if (std::sscanf(c.size.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 ||
+            (x != 'x' && x != 'X'))
             UsageError("--size '{}': expected WIDTHxHEIGHT, e.g. 800x600", c.size);
     }
     const solve::ToneMap tone = ParseTone(c.exposure, c.tonemap);
@@ -187,12 +207,16 @@ int RunRender(const RenderCommand& c) {
     solve::BakeView view = solve::OpenBakeView(c.dir);
     solve::RenderOptions ro;
     ro.camera = solve::DefaultCamera(view, w, h, c.fov);
-    if (!c.eye.empty()) ro.camera.eye = ToVec3(c.eye, "--eye");
-    if (!c.target.empty()) ro.camera.target = ToVec3(c.target, "--target");
-    if (!c.up.empty()) ro.camera.up = ToVec3(c.up, "--up");
+    if (!c.eye.empty())
+        ro.camera.eye = ToVec3(c.eye, "--eye");
+    if (!c.target.empty())
+        ro.camera.target = ToVec3(c.target, "--target");
+    if (!c.up.empty())
+        ro.camera.up = ToVec3(c.up, "--up");
     ro.glossy = c.glossy;
     ro.samples = c.samples;
-    if (!c.background.empty()) ro.background = Vec3f(ToVec3(c.background, "--background"));
+    if (!c.background.empty())
+        ro.background = Vec3f(ToVec3(c.background, "--background"));
     const solve::RenderedImage img = solve::Render(view, ro);
     solve::WriteRenderedImage(img, c.output, tone,
                               c.float_output ? io::ExrPixelType::Float : io::ExrPixelType::Half);

@@ -2,6 +2,10 @@
 // rename discipline of every mebake output applies), and a small reader for tests.
 #include "io/exr_writer.h"
 
+#include "core/check.h"
+#include "core/error.h"
+#include "io/byte_stream.h"
+
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -9,21 +13,16 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
-#include <half.h>
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
+#include <half.h>
 #include <set>
-
-#include "core/check.h"
-#include "core/error.h"
-#include "io/byte_stream.h"
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace mebake::io {
 
@@ -42,7 +41,8 @@ public:
         size_t left = size_t(n);
         while (left > 0) {
             ssize_t k = ::pwrite(fd_, c, left, off_t(pos_));
-            if (k < 0 && errno == EINTR) continue;
+            if (k < 0 && errno == EINTR)
+                continue;
             if (k <= 0) {
                 error = k < 0 ? ErrnoString(errno) : std::string("nothing written");
                 IoError({fileName()}, "write failed: {}", error);
@@ -64,9 +64,12 @@ private:
 
 Imf::Compression ToImf(ExrCompression c) {
     switch (c) {
-    case ExrCompression::None: return Imf::NO_COMPRESSION;
-    case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
-    case ExrCompression::Zip: break;
+    case ExrCompression::None:
+        return Imf::NO_COMPRESSION;
+    case ExrCompression::Piz:
+        return Imf::PIZ_COMPRESSION;
+    case ExrCompression::Zip:
+        break;
     }
     return Imf::ZIP_COMPRESSION;
 }
@@ -94,8 +97,10 @@ struct ExrWriter::Impl {
 
     ~Impl() {
         file.reset();  // writes the offset table (errors ignored: we are giving up)
-        if (fd >= 0) ::close(fd);
-        if (!committed && !temp.empty()) ::unlink(temp.c_str());
+        if (fd >= 0)
+            ::close(fd);
+        if (!committed && !temp.empty())
+            ::unlink(temp.c_str());
     }
 };
 
@@ -126,7 +131,8 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
     std::vector<char> name(tmpl.begin(), tmpl.end());
     name.push_back('\0');
     m.fd = ::mkostemp(name.data(), O_CLOEXEC);
-    if (m.fd < 0) IoError({m.path}, "cannot create output: {}", ErrnoString(errno));
+    if (m.fd < 0)
+        IoError({m.path}, "cannot create output: {}", ErrnoString(errno));
     if (m.to_stdout) {
         ::unlink(name.data());  // nothing is left behind whatever happens
     } else {
@@ -137,9 +143,11 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
     Imf::Header h(width, height);
     h.compression() = ToImf(options.compression);
     const Imf::PixelType type = options.type == ExrPixelType::Half ? Imf::HALF : Imf::FLOAT;
-    for (const auto& c : m.channels) h.channels().insert(c, Imf::Channel(type));
+    for (const auto& c : m.channels)
+        h.channels().insert(c, Imf::Channel(type));
     h.insert("software", Imf::StringAttribute("mebake"));
-    if (!options.comments.empty()) h.insert("comments", Imf::StringAttribute(options.comments));
+    if (!options.comments.empty())
+        h.insert("comments", Imf::StringAttribute(options.comments));
     for (const auto& [key, value] : options.attributes)
         h.insert(key, Imf::StringAttribute(value));
     m.stream = std::make_unique<FdOStream>(m.fd, m.to_stdout ? "<stdout>" : m.path);
@@ -155,8 +163,12 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
 
 ExrWriter::~ExrWriter() = default;
 
-int ExrWriter::rows_written() const { return impl_->rows; }
-const std::string& ExrWriter::path() const { return impl_->path; }
+int ExrWriter::rows_written() const {
+    return impl_->rows;
+}
+const std::string& ExrWriter::path() const {
+    return impl_->path;
+}
 
 void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     Impl& m = *impl_;
@@ -165,7 +177,8 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     CHECK_LE(m.rows + rows, m.height);
     const size_t nc = m.channels.size();
     CHECK_EQ(pixels.size(), size_t(rows) * size_t(m.width) * nc);
-    if (rows == 0) return;
+    if (rows == 0)
+        return;
     // OpenEXR does not convert between a slice's type and the file's when writing.
     const bool half = m.options.type == ExrPixelType::Half;
     const size_t elem = half ? sizeof(Imath::half) : sizeof(float);
@@ -179,7 +192,8 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
         data = reinterpret_cast<char*>(m.half_scratch.data());
     } else {
         m.scratch.assign(pixels.begin(), pixels.end());
-        for (float v : m.scratch) CHECK(std::isfinite(v));
+        for (float v : m.scratch)
+            CHECK(std::isfinite(v));
         data = reinterpret_cast<char*>(m.scratch.data());
     }
     const size_t xs = nc * elem, ys = xs * size_t(m.width);
@@ -205,22 +219,27 @@ void ExrWriter::Commit() {
     CHECK(m.file);
     CHECK_EQ(m.rows, m.height);
     m.file.reset();
-    if (!m.stream->error.empty()) IoError({m.path}, "write failed: {}", m.stream->error);
+    if (!m.stream->error.empty())
+        IoError({m.path}, "write failed: {}", m.stream->error);
     if (m.to_stdout) {
         auto out = OutputStream::Open("-");
         std::vector<char> buf(size_t(1) << 20);
         off_t at = 0;
         for (;;) {
             ssize_t n = ::pread(m.fd, buf.data(), buf.size(), at);
-            if (n < 0 && errno == EINTR) continue;
-            if (n < 0) IoError({m.path}, "cannot read back the EXR temporary: {}", ErrnoString(errno));
-            if (n == 0) break;
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n < 0)
+                IoError({m.path}, "cannot read back the EXR temporary: {}", ErrnoString(errno));
+            if (n == 0)
+                break;
             out->Write(buf.data(), size_t(n));
             at += n;
         }
         out->Commit();
     } else {
-        if (::fsync(m.fd) != 0) IoError({m.path}, "fsync failed: {}", ErrnoString(errno));
+        if (::fsync(m.fd) != 0)
+            IoError({m.path}, "fsync failed: {}", ErrnoString(errno));
         if (::rename(m.temp.c_str(), m.path.c_str()) != 0)
             IoError({m.path}, "cannot rename the finished output into place: {}",
                     ErrnoString(errno));
@@ -238,12 +257,14 @@ void WriteExr(const std::string& path, int width, int height,
 
 int ExrImage::Channel(const std::string& name) const {
     for (size_t k = 0; k < channels.size(); ++k)
-        if (channels[k] == name) return int(k);
+        if (channels[k] == name)
+            return int(k);
     return -1;
 }
 
 ExrImage ReadExr(const std::string& path, uint64_t max_pixels) {
-    if (!std::filesystem::exists(path)) IoError({path}, "no such file");
+    if (!std::filesystem::exists(path))
+        IoError({path}, "no such file");
     ExrImage img;
     try {
         Imf::InputFile file(path.c_str(), 0);
@@ -259,10 +280,18 @@ ExrImage ReadExr(const std::string& path, uint64_t max_pixels) {
             img.half.push_back(it.channel().type == Imf::HALF);
         }
         switch (h.compression()) {
-        case Imf::NO_COMPRESSION: img.compression = "none"; break;
-        case Imf::ZIP_COMPRESSION: img.compression = "zip"; break;
-        case Imf::PIZ_COMPRESSION: img.compression = "piz"; break;
-        default: img.compression = "other"; break;
+        case Imf::NO_COMPRESSION:
+            img.compression = "none";
+            break;
+        case Imf::ZIP_COMPRESSION:
+            img.compression = "zip";
+            break;
+        case Imf::PIZ_COMPRESSION:
+            img.compression = "piz";
+            break;
+        default:
+            img.compression = "other";
+            break;
         }
         for (auto it = h.begin(); it != h.end(); ++it)
             if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
@@ -274,8 +303,7 @@ ExrImage ReadExr(const std::string& path, uint64_t max_pixels) {
                        ptrdiff_t(int64_t(dw.min.x) * int64_t(xs) + int64_t(dw.min.y) * int64_t(ys));
         Imf::FrameBuffer fb;
         for (size_t k = 0; k < nc; ++k)
-            fb.insert(img.channels[k],
-                      Imf::Slice(Imf::FLOAT, origin + k * sizeof(float), xs, ys));
+            fb.insert(img.channels[k], Imf::Slice(Imf::FLOAT, origin + k * sizeof(float), xs, ys));
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);
     } catch (const Error&) {

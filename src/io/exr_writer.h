@@ -68,9 +68,9 @@ void WriteExr(const std::string& path, int width, int height,
 struct ExrImage {
     int width = 0, height = 0;
     std::vector<std::string> channels;
-    std::vector<bool> half;        // per channel: stored as half
-    std::vector<float> pixels;     // pixel-major, channels.size() per pixel
-    std::string compression;       // "none", "zip", "piz", "other"
+    std::vector<bool> half;     // per channel: stored as half
+    std::vector<float> pixels;  // pixel-major, channels.size() per pixel
+    std::string compression;    // "none", "zip", "piz", "other"
     std::vector<std::pair<std::string, std::string>> string_attributes;
 
     // Index of a channel by name, -1 when absent.

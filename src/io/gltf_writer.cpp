@@ -4,24 +4,23 @@
 // padded to 4 bytes. Primitives are accessor windows (byteOffset) into those views.
 #include "io/gltf_writer.h"
 
-#include <fcntl.h>
-#include <unistd.h>
+#include "core/check.h"
+#include "core/error.h"
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
-
-#include "core/check.h"
-#include "core/error.h"
+#include <unistd.h>
 
 namespace mebake::io {
 
 namespace {
 
-constexpr uint32_t kGlbMagic = 0x46546C67;  // "glTF"
+constexpr uint32_t kGlbMagic = 0x46546C67;   // "glTF"
 constexpr uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
 constexpr uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 constexpr uint32_t kFloat = 5126, kUnsignedInt = 5125;
@@ -38,7 +37,8 @@ public:
         std::vector<char> name(tmpl.begin(), tmpl.end());
         name.push_back('\0');
         fd_ = ::mkostemp(name.data(), O_CLOEXEC);
-        if (fd_ < 0) IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
+        if (fd_ < 0)
+            IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
         ::unlink(name.data());
         dir_ = dir;
         buffer_.reserve(kBuffer);
@@ -49,7 +49,8 @@ public:
 
     void Append(const void* data, size_t n) {
         const auto* p = static_cast<const uint8_t*>(data);
-        if (buffer_.size() + n > kBuffer) Flush();
+        if (buffer_.size() + n > kBuffer)
+            Flush();
         if (n >= kBuffer) {
             WriteAll(p, n);
         } else {
@@ -65,13 +66,17 @@ public:
         off_t at = 0;
         for (;;) {
             ssize_t k = ::pread(fd_, buf.data(), buf.size(), at);
-            if (k < 0 && errno == EINTR) continue;
-            if (k < 0) IoError({dir_}, "cannot read back a temporary file: {}", ErrnoString(errno));
-            if (k == 0) break;
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k < 0)
+                IoError({dir_}, "cannot read back a temporary file: {}", ErrnoString(errno));
+            if (k == 0)
+                break;
             out.Write(buf.data(), size_t(k));
             at += k;
         }
-        if (uint64_t(at) != size_) IoError({dir_}, "a temporary file is shorter than written");
+        if (uint64_t(at) != size_)
+            IoError({dir_}, "a temporary file is shorter than written");
     }
 
 private:
@@ -83,8 +88,10 @@ private:
     void WriteAll(const uint8_t* p, size_t n) {
         while (n > 0) {
             ssize_t k = ::write(fd_, p, n);
-            if (k < 0 && errno == EINTR) continue;
-            if (k < 0) IoError({dir_}, "cannot write a temporary file: {}", ErrnoString(errno));
+            if (k < 0 && errno == EINTR)
+                continue;
+            if (k < 0)
+                IoError({dir_}, "cannot write a temporary file: {}", ErrnoString(errno));
             p += k;
             n -= size_t(k);
         }
@@ -96,12 +103,15 @@ private:
 };
 
 std::string TempDir(const GlbOptions& opt) {
-    if (!opt.temp_dir.empty()) return opt.temp_dir;
+    if (!opt.temp_dir.empty())
+        return opt.temp_dir;
     const char* t = std::getenv("TMPDIR");
     return t && *t ? t : "/tmp";
 }
 
-uint64_t Pad4(uint64_t n) { return (n + 3) & ~uint64_t(3); }
+uint64_t Pad4(uint64_t n) {
+    return (n + 3) & ~uint64_t(3);
+}
 
 void WriteU32(OutputStream& out, uint32_t v) {
     uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
@@ -187,7 +197,8 @@ uint32_t GlbWriter::AddVertices(std::span<const Vec3f> position, std::span<const
         m.scratch.insert(m.scratch.end(), {u.x, u.y, u.z});
     }
     m.normals->Append(m.scratch.data(), m.scratch.size() * sizeof(float));
-    for (const Vec2f& t : uv) CHECK(std::isfinite(t.x) && std::isfinite(t.y));
+    for (const Vec2f& t : uv)
+        CHECK(std::isfinite(t.x) && std::isfinite(t.y));
     m.uvs->Append(uv.data(), uv.size_bytes());
     p.vertices += position.size();
     m.vertices += position.size();
@@ -215,7 +226,8 @@ void GlbWriter::Finish(OutputStream& out) {
     json j;
     j["asset"] = {{"version", "2.0"}, {"generator", m.options.generator}};
     const bool unlit = m.options.mode == GlbLightMapMode::Unlit;
-    if (unlit) j["extensionsUsed"] = {"KHR_materials_unlit"};
+    if (unlit)
+        j["extensionsUsed"] = {"KHR_materials_unlit"};
 
     // Binary chunk layout.
     json views = json::array(), accessors = json::array(), images = json::array();
@@ -228,9 +240,11 @@ void GlbWriter::Finish(OutputStream& out) {
     // Several primitives' accessors share a vertex view, which glTF allows only with an
     // explicit byteStride (index views must not have one).
     auto add_view = [&](uint64_t bytes, uint32_t target, uint32_t stride) -> int64_t {
-        if (bytes == 0) return -1;
+        if (bytes == 0)
+            return -1;
         json v = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}};
-        if (stride) v["byteStride"] = stride;
+        if (stride)
+            v["byteStride"] = stride;
         views.push_back(v);
         offset = Pad4(offset + bytes);
         return int64_t(views.size() - 1);
@@ -243,11 +257,15 @@ void GlbWriter::Finish(OutputStream& out) {
 
     json prims = json::array();
     for (const auto& p : m.primitives) {
-        if (p.indices == 0 || p.vertices == 0) continue;  // glTF accessors need count >= 1
+        if (p.indices == 0 || p.vertices == 0)
+            continue;  // glTF accessors need count >= 1
         auto accessor = [&](int64_t view, uint64_t byte_offset, uint32_t component, uint64_t count,
                             const char* type) {
-            accessors.push_back({{"bufferView", view}, {"byteOffset", byte_offset},
-                                 {"componentType", component}, {"count", count}, {"type", type}});
+            accessors.push_back({{"bufferView", view},
+                                 {"byteOffset", byte_offset},
+                                 {"componentType", component},
+                                 {"count", count},
+                                 {"type", type}});
             return accessors.size() - 1;
         };
         const size_t a_pos = accessor(v_pos, p.first_vertex * 12, kFloat, p.vertices, "VEC3");
@@ -256,12 +274,12 @@ void GlbWriter::Finish(OutputStream& out) {
         const size_t a_nrm = accessor(v_nrm, p.first_vertex * 12, kFloat, p.vertices, "VEC3");
         const size_t a_uv = accessor(v_uv, p.first_vertex * 8, kFloat, p.vertices, "VEC2");
         const size_t a_idx = accessor(v_idx, p.first_index * 4, kUnsignedInt, p.indices, "SCALAR");
-        prims.push_back({{"attributes",
-                          {{"POSITION", a_pos}, {"NORMAL", a_nrm}, {"TEXCOORD_0", a_uv},
-                           {"TEXCOORD_1", a_uv}}},
-                         {"indices", a_idx},
-                         {"material", p.material},
-                         {"mode", 4}});
+        prims.push_back(
+            {{"attributes",
+              {{"POSITION", a_pos}, {"NORMAL", a_nrm}, {"TEXCOORD_0", a_uv}, {"TEXCOORD_1", a_uv}}},
+             {"indices", a_idx},
+             {"material", p.material},
+             {"mode", 4}});
     }
     if (prims.empty()) {
         j["scenes"] = json::array({json::object()});
@@ -302,7 +320,8 @@ void GlbWriter::Finish(OutputStream& out) {
         j["buffers"] = json::array({{{"byteLength", bin_bytes}}});
         j["bufferViews"] = views;
     }
-    if (!accessors.empty()) j["accessors"] = accessors;
+    if (!accessors.empty())
+        j["accessors"] = accessors;
 
     const std::string text = j.dump();
     const uint64_t json_bytes = Pad4(text.size());

@@ -20,15 +20,15 @@
 // suggesting PLY or OBJ when it would.
 #pragma once
 
+#include "core/vec.h"
+#include "io/byte_stream.h"
+
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
-
-#include "core/vec.h"
-#include "io/byte_stream.h"
 
 namespace mebake::io {
 

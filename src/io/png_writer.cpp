@@ -3,14 +3,13 @@
 // from our output stream, parked in the Impl) are turned into exceptions after the jump.
 #include "io/png_writer.h"
 
-#include <png.h>
+#include "core/check.h"
+#include "core/error.h"
 
 #include <csetjmp>
 #include <cstring>
 #include <exception>
-
-#include "core/check.h"
-#include "core/error.h"
+#include <png.h>
 
 namespace mebake::io {
 
@@ -40,7 +39,8 @@ struct PngWriter::Impl {
     bool finished = false;
 
     ~Impl() {
-        if (png) png_destroy_write_struct(&png, &info);
+        if (png)
+            png_destroy_write_struct(&png, &info);
     }
 
     static void Write(png_structp png, png_bytep data, size_t n) {
@@ -52,18 +52,21 @@ struct PngWriter::Impl {
             self->error.pending = std::current_exception();
             failed = true;
         }
-        if (failed) png_error(png, "output stream failed");
+        if (failed)
+            png_error(png, "output stream failed");
     }
     static void Flush(png_structp) {}
 
     [[noreturn]] void Fail() {
-        if (error.pending) std::rethrow_exception(error.pending);
+        if (error.pending)
+            std::rethrow_exception(error.pending);
         IoError({out->name()}, "PNG encoding failed: {}", error.message);
     }
 
     // Each returns false after a libpng error.
     bool Start() {
-        if (setjmp(png_jmpbuf(png))) return false;
+        if (setjmp(png_jmpbuf(png)))
+            return false;
         png_set_write_fn(png, this, &Impl::Write, &Impl::Flush);
         png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 8,
                      channels == 4 ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB,
@@ -79,13 +82,16 @@ struct PngWriter::Impl {
         return true;
     }
     bool Rows(const uint8_t* data, int count) {
-        if (setjmp(png_jmpbuf(png))) return false;
+        if (setjmp(png_jmpbuf(png)))
+            return false;
         const size_t stride = size_t(width) * size_t(channels);
-        for (int r = 0; r < count; ++r) png_write_row(png, const_cast<png_bytep>(data + r * stride));
+        for (int r = 0; r < count; ++r)
+            png_write_row(png, const_cast<png_bytep>(data + r * stride));
         return true;
     }
     bool End() {
-        if (setjmp(png_jmpbuf(png))) return false;
+        if (setjmp(png_jmpbuf(png)))
+            return false;
         png_write_end(png, info);
         return true;
     }
@@ -102,10 +108,13 @@ PngWriter::PngWriter(OutputStream& out, int width, int height, int channels)
     m.height = height;
     m.channels = channels;
     m.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &m.error, OnError, OnWarning);
-    if (!m.png) IoError({out.name()}, "libpng could not start (out of memory)");
+    if (!m.png)
+        IoError({out.name()}, "libpng could not start (out of memory)");
     m.info = png_create_info_struct(m.png);
-    if (!m.info) IoError({out.name()}, "libpng could not start (out of memory)");
-    if (!m.Start()) m.Fail();
+    if (!m.info)
+        IoError({out.name()}, "libpng could not start (out of memory)");
+    if (!m.Start())
+        m.Fail();
 }
 
 PngWriter::~PngWriter() = default;
@@ -116,7 +125,8 @@ void PngWriter::WriteRows(std::span<const uint8_t> pixels, int rows) {
     CHECK_GE(rows, 0);
     CHECK_LE(m.rows + rows, m.height);
     CHECK_EQ(pixels.size(), size_t(rows) * size_t(m.width) * size_t(m.channels));
-    if (!m.Rows(pixels.data(), rows)) m.Fail();
+    if (!m.Rows(pixels.data(), rows))
+        m.Fail();
     m.rows += rows;
 }
 
@@ -124,7 +134,8 @@ void PngWriter::Finish() {
     Impl& m = *impl_;
     CHECK(!m.finished);
     CHECK_EQ(m.rows, m.height);
-    if (!m.End()) m.Fail();
+    if (!m.End())
+        m.Fail();
     m.finished = true;
 }
 
@@ -157,7 +168,8 @@ struct ReadState {
 
 void ReadFn(png_structp png, png_bytep dst, size_t n) {
     auto* s = static_cast<ReadState*>(png_get_io_ptr(png));
-    if (n > s->bytes.size() - s->pos) png_error(png, "truncated PNG");
+    if (n > s->bytes.size() - s->pos)
+        png_error(png, "truncated PNG");
     std::memcpy(dst, s->bytes.data() + s->pos, n);
     s->pos += n;
 }
@@ -165,7 +177,8 @@ void ReadFn(png_structp png, png_bytep dst, size_t n) {
 // Decodes into img; false after a libpng error (message in err).
 bool Decode(png_structp png, png_infop info, ReadState* rs, PngImage* img,
             std::vector<png_bytep>* rows) {
-    if (setjmp(png_jmpbuf(png))) return false;
+    if (setjmp(png_jmpbuf(png)))
+        return false;
     png_set_read_fn(png, rs, ReadFn);
     png_set_user_limits(png, 1u << 16, 1u << 16);
     png_read_info(png, info);
@@ -177,11 +190,13 @@ bool Decode(png_structp png, png_infop info, ReadState* rs, PngImage* img,
     img->height = int(png_get_image_height(png, info));
     img->channels = int(png_get_channels(png, info));
     img->srgb = png_get_valid(png, info, PNG_INFO_sRGB) != 0;
-    if (img->channels != 3 && img->channels != 4) png_error(png, "unexpected channel count");
+    if (img->channels != 3 && img->channels != 4)
+        png_error(png, "unexpected channel count");
     const size_t stride = png_get_rowbytes(png, info);
     img->pixels.resize(stride * size_t(img->height));
     rows->resize(size_t(img->height));
-    for (int y = 0; y < img->height; ++y) (*rows)[size_t(y)] = img->pixels.data() + size_t(y) * stride;
+    for (int y = 0; y < img->height; ++y)
+        (*rows)[size_t(y)] = img->pixels.data() + size_t(y) * stride;
     png_read_image(png, rows->data());
     png_read_end(png, nullptr);
     return true;
@@ -194,14 +209,16 @@ PngImage DecodePng(std::span<const uint8_t> bytes, const std::string& name) {
         InputError({name, 0}, "not a PNG file (bad signature)");
     ErrorState err;
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &err, OnError, OnWarning);
-    if (!png) IoError({name}, "libpng could not start (out of memory)");
+    if (!png)
+        IoError({name}, "libpng could not start (out of memory)");
     png_infop info = png_create_info_struct(png);
     ReadState rs{bytes, 0};
     PngImage img;
     std::vector<png_bytep> rows;
     const bool ok = info && Decode(png, info, &rs, &img, &rows);
     png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
-    if (!ok) InputError({name, rs.pos}, "cannot decode PNG: {}", err.message);
+    if (!ok)
+        InputError({name, rs.pos}, "cannot decode PNG: {}", err.message);
     return img;
 }
 
@@ -209,7 +226,8 @@ PngImage ReadPng(const std::string& path) {
     auto in = InputStream::Open(path);
     std::vector<uint8_t> bytes;
     uint8_t buf[65536];
-    for (size_t n; (n = in->Read(buf, sizeof(buf))) > 0;) bytes.insert(bytes.end(), buf, buf + n);
+    for (size_t n; (n = in->Read(buf, sizeof(buf))) > 0;)
+        bytes.insert(bytes.end(), buf, buf + n);
     return DecodePng(bytes, in->name());
 }
 

@@ -4,13 +4,13 @@
 // "Software" text chunk; pixels must already be sRGB-encoded (solve/tonemap.h does it).
 #pragma once
 
+#include "io/byte_stream.h"
+
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
-
-#include "io/byte_stream.h"
 
 namespace mebake::io {
 

@@ -1,11 +1,11 @@
 #include "solve/atlas.h"
 
+#include "core/check.h"
+#include "core/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include "core/check.h"
-#include "core/error.h"
 
 namespace mebake::solve {
 
@@ -13,11 +13,14 @@ namespace {
 
 uint32_t NextPow2(uint64_t n) {
     uint64_t p = 1;
-    while (p < n) p <<= 1;
+    while (p < n)
+        p <<= 1;
     return uint32_t(p);
 }
 
-uint32_t RoundUp4(uint64_t n) { return uint32_t((n + 3) & ~uint64_t(3)); }
+uint32_t RoundUp4(uint64_t n) {
+    return uint32_t((n + 3) & ~uint64_t(3));
+}
 
 struct Placement {
     uint32_t x, y;
@@ -32,14 +35,17 @@ size_t Simulate(std::span<const uint32_t> order, size_t first, std::span<const u
     size_t k = first;
     for (; k < order.size(); ++k) {
         const uint32_t b = blocks[order[k]];
-        if (b > width) break;
+        if (b > width)
+            break;
         if (x + b > width) {
             y += shelf;
             x = 0;
             shelf = 0;
         }
-        if (y + b > height) break;
-        if (out) out->push_back({uint32_t(x), uint32_t(y)});
+        if (y + b > height)
+            break;
+        if (out)
+            out->push_back({uint32_t(x), uint32_t(y)});
         x += b;
         shelf = std::max<uint64_t>(shelf, b);
     }
@@ -65,13 +71,15 @@ Vec2f Atlas::TexelUv(uint32_t chart, uint32_t bx, uint32_t by) const {
 
 uint64_t Atlas::texels() const {
     uint64_t n = 0;
-    for (const auto& p : pages) n += uint64_t(p.width) * p.height;
+    for (const auto& p : pages)
+        n += uint64_t(p.width) * p.height;
     return n;
 }
 
 double Atlas::fill() const {
     uint64_t used = 0;
-    for (const auto& c : charts) used += uint64_t(c.resolution) * c.resolution;
+    for (const auto& c : charts)
+        used += uint64_t(c.resolution) * c.resolution;
     const uint64_t all = texels();
     return all ? double(used) / double(all) : 0.0;
 }
@@ -79,7 +87,8 @@ double Atlas::fill() const {
 Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& opt) {
     if (opt.max_size < 16 || opt.max_size > (1u << 16) || (opt.max_size & (opt.max_size - 1)))
         UsageError("--max-atlas {}: expected a power of two from 16 to 65536", opt.max_size);
-    if (opt.gutter > 64) UsageError("gutter {}: at most 64 texels", opt.gutter);
+    if (opt.gutter > 64)
+        UsageError("gutter {}: at most 64 texels", opt.gutter);
     Atlas atlas;
     atlas.gutter = opt.gutter;
     const size_t n = resolutions.size();
@@ -105,23 +114,27 @@ Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& opt) 
         // The smallest page that takes every remaining chart, if one of at most max_size
         // per side does; otherwise a full max_size page.
         uint64_t area = 0;
-        for (size_t k = first; k < n; ++k) area += uint64_t(blocks[order[k]]) * blocks[order[k]];
+        for (size_t k = first; k < n; ++k)
+            area += uint64_t(blocks[order[k]]) * blocks[order[k]];
         uint32_t best_w = 0, best_h = 0;
         const uint32_t largest = blocks[order[first]];
         std::vector<uint32_t> widths;
         if (opt.power_of_two) {
-            for (uint32_t w = NextPow2(largest); w <= opt.max_size; w *= 2) widths.push_back(w);
+            for (uint32_t w = NextPow2(largest); w <= opt.max_size; w *= 2)
+                widths.push_back(w);
         } else {
             // Widths holding k of the largest blocks per shelf, from a little under the
             // square root of the area on (narrower pages cannot be smaller); 64 at most.
-            const uint64_t k0 = std::max<uint64_t>(
-                1, uint64_t(0.7 * std::sqrt(double(area)) / largest));
+            const uint64_t k0 =
+                std::max<uint64_t>(1, uint64_t(0.7 * std::sqrt(double(area)) / largest));
             for (uint64_t k = k0; k < k0 + 64 && RoundUp4(k * largest) <= opt.max_size; ++k)
                 widths.push_back(RoundUp4(k * largest));
-            if (widths.empty() || widths.back() != opt.max_size) widths.push_back(opt.max_size);
+            if (widths.empty() || widths.back() != opt.max_size)
+                widths.push_back(opt.max_size);
         }
         for (uint32_t w : widths) {
-            if (uint64_t(w) * opt.max_size < area) continue;
+            if (uint64_t(w) * opt.max_size < area)
+                continue;
             uint32_t used = 0;
             if (Simulate(order, first, blocks, w, opt.max_size, &used, nullptr) != n - first)
                 continue;
@@ -130,7 +143,8 @@ Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& opt) 
             if (best_w == 0 || a < best || (a == best && std::max(w, h) < std::max(best_w, best_h)))
                 best_w = w, best_h = h;
         }
-        if (best_w == 0) best_w = best_h = opt.max_size;
+        if (best_w == 0)
+            best_w = best_h = opt.max_size;
         placed.clear();
         uint32_t used = 0;
         const size_t k = Simulate(order, first, blocks, best_w, best_h, &used, &placed);

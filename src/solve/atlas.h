@@ -22,11 +22,11 @@
 // is the bottom-left (OBJ, PLY as read by most tools) use (s, 1 - t): see export_mesh.h.
 #pragma once
 
+#include "core/vec.h"
+
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::solve {
 
@@ -38,13 +38,13 @@ struct AtlasOptions {
 
 struct AtlasChart {
     uint32_t page = 0;
-    uint32_t x = 0, y = 0;      // top-left texel of the block (gutter included)
-    uint32_t resolution = 0;    // texels per side of the chart's square
+    uint32_t x = 0, y = 0;    // top-left texel of the block (gutter included)
+    uint32_t resolution = 0;  // texels per side of the chart's square
 };
 
 struct AtlasShelf {
-    uint32_t y = 0, height = 0;      // rows [y, y + height) of the page
-    std::vector<uint32_t> charts;    // left to right
+    uint32_t y = 0, height = 0;    // rows [y, y + height) of the page
+    std::vector<uint32_t> charts;  // left to right
 };
 
 struct AtlasPage {

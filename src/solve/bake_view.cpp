@@ -1,12 +1,12 @@
 #include "solve/bake_view.h"
 
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "solve/shading.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
 
 namespace mebake::solve {
 
@@ -48,7 +48,8 @@ std::vector<uint32_t> ChartResolutions(const BakeView& view) {
 
 std::vector<uint32_t> AllCharts(const BakeView& view) {
     std::vector<uint32_t> all(view.chart_count());
-    for (size_t c = 0; c < all.size(); ++c) all[c] = uint32_t(c);
+    for (size_t c = 0; c < all.size(); ++c)
+        all[c] = uint32_t(c);
     return all;
 }
 
@@ -60,13 +61,15 @@ ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
         const uint32_t packed = tile.material[t];
         const uint32_t input = packed >> 16, local = packed & 0xFFFF;
         if (input >= scene.per_input.size() || local >= scene.per_input[input].size())
-            CorruptError({tile_path}, "triangle {} has material {}:{} which the scene does not have",
-                         t, input, local);
+            CorruptError({tile_path},
+                         "triangle {} has material {}:{} which the scene does not have", t, input,
+                         local);
     }
     CHECK_EQ(tile.material.size(), tile.triangles.size());
     vertex_triangle_.assign(tile.position.size(), stream::kNoTriangle);
     for (size_t t = tile.triangles.size(); t-- > 0;)
-        for (uint32_t v : tile.triangles[t]) vertex_triangle_[v] = uint32_t(t);
+        for (uint32_t v : tile.triangles[t])
+            vertex_triangle_[v] = uint32_t(t);
 }
 
 Vec3f ChartShader::Color(uint32_t v) const {
@@ -84,14 +87,16 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
         uv += tile_.uv[f[k]] * b[k];
         n += Vec3d(tile_.normal[f[k]]) * double(b[k]);
         const Vec3f ck = Color(f[k]);
-        if (ck.x < 0) colored = false;
+        if (ck.x < 0)
+            colored = false;
         c += Vec3d(ck) * double(b[k]);
     }
     n = Normalize(n);
     if (!(Dot(n, n) > 0)) {
         const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);
         n = Normalize(Cross(p1 - p0, p2 - p0));
-        if (!(Dot(n, n) > 0)) n = Vec3d(0, 0, 1);
+        if (!(Dot(n, n) > 0))
+            n = Vec3d(0, 0, 1);
     }
     p.uv = uv;
     p.normal = Vec3f(n);
@@ -124,7 +129,8 @@ ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     Vec3f n = Normalize(tile_.normal[v]);
     p.normal = Dot(n, n) > 0 ? n : Vec3f(0, 0, 1);
     const uint32_t t = vertex_triangle_[v];
-    p.material = t == stream::kNoTriangle ? &default_material_ : &scene_.MaterialOf(tile_.material[t]);
+    p.material =
+        t == stream::kNoTriangle ? &default_material_ : &scene_.MaterialOf(tile_.material[t]);
     p.albedo = SurfaceAlbedo(*p.material, Color(v));
     return p;
 }
@@ -139,7 +145,8 @@ Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
 }
 
 Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
-    Vec3f l = ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
+    Vec3f l =
+        ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(l[c]));
         l[c] = std::max(0.f, l[c]);
@@ -149,7 +156,8 @@ Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
 
 void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
     VectorIrradianceAt(field_, radiosity_, uv.x, uv.y, e);
-    for (int c = 0; c < 3; ++c) CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
+    for (int c = 0; c < 3; ++c)
+        CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
 }
 
 }  // namespace mebake::solve

@@ -11,11 +11,6 @@
 // point is, so texels that straddle the chart's outline filter smoothly.
 #pragma once
 
-#include <algorithm>
-#include <span>
-#include <string>
-#include <vector>
-
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "solve/field.h"
@@ -23,6 +18,11 @@
 #include "solve/solution.h"
 #include "stream/bake_dir.h"
 #include "stream/tile.h"
+
+#include <algorithm>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace mebake::solve {
 
@@ -53,7 +53,8 @@ template <typename Prepare, typename Consume>
 void ForEachTile(const BakeView& view, std::span<const uint32_t> charts, stream::TileParts parts,
                  Prepare&& prepare, Consume&& consume, size_t batch = 0) {
     using Result = decltype(prepare(uint32_t(0), std::declval<stream::ChartTile&>()));
-    if (batch == 0) batch = size_t(std::max(1, 2 * MaxThreads()));
+    if (batch == 0)
+        batch = size_t(std::max(1, 2 * MaxThreads()));
     std::vector<stream::ChartTile> tiles;
     std::vector<Result> results;
     for (size_t first = 0; first < charts.size(); first += batch) {
@@ -65,7 +66,8 @@ void ForEachTile(const BakeView& view, std::span<const uint32_t> charts, stream:
             tiles[size_t(k)] = stream::ReadTile(view.TilePath(c), parts);
             results[size_t(k)] = prepare(c, tiles[size_t(k)]);
         });
-        for (size_t k = 0; k < n; ++k) consume(charts[first + k], tiles[k], results[k]);
+        for (size_t k = 0; k < n; ++k)
+            consume(charts[first + k], tiles[k], results[k]);
     }
 }
 
@@ -74,9 +76,9 @@ std::vector<uint32_t> AllCharts(const BakeView& view);
 
 // What shading needs at a surface point of a chart.
 struct ShadingPoint {
-    Vec2f uv;                          // chart point where the field is evaluated
-    Vec3f normal;                      // unit
-    Vec3f albedo;                      // linear
+    Vec2f uv;      // chart point where the field is evaluated
+    Vec3f normal;  // unit
+    Vec3f albedo;  // linear
     const Material* material = nullptr;
 };
 

@@ -1,13 +1,13 @@
 #include "solve/export_mesh.h"
 
-#include <algorithm>
-#include <cctype>
-#include <filesystem>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "io/mesh_format.h"
 #include "solve/lightmap.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
 
 namespace mebake::solve {
 
@@ -40,8 +40,8 @@ MeshExportStats WriteLinear(const BakeView& view, const Atlas& atlas, const std:
     wo.ply_encoding = opt.ply_encoding;
     wo.temp_dir = opt.temp_dir;
     auto out = io::OutputStream::Open(path);
-    auto sink = format == io::MeshFormat::Ply ? io::MakePlyWriter(*out, wo)
-                                              : io::MakeObjWriter(*out, wo);
+    auto sink =
+        format == io::MeshFormat::Ply ? io::MakePlyWriter(*out, wo) : io::MakeObjWriter(*out, wo);
     io::MeshHeader h;
     h.source = view.dir;
     h.format = format;
@@ -62,16 +62,19 @@ MeshExportStats WriteLinear(const BakeView& view, const Atlas& atlas, const std:
             b.vertices.position = std::move(tile.position);
             b.vertices.normal = std::move(tile.normal);
             b.vertices.uv.reserve(tile.uv.size());
-            for (const Vec2f& uv : tile.uv) b.vertices.uv.push_back(BottomLeftUv(atlas, c, uv));
+            for (const Vec2f& uv : tile.uv)
+                b.vertices.uv.push_back(BottomLeftUv(atlas, c, uv));
             b.faces.size.assign(tile.triangles.size(), 3);
             b.faces.index.reserve(tile.triangles.size() * 3);
-            for (const auto& t : tile.triangles) b.faces.index.insert(b.faces.index.end(), t.begin(), t.end());
+            for (const auto& t : tile.triangles)
+                b.faces.index.insert(b.faces.index.end(), t.begin(), t.end());
             return b;
         },
         [&](uint32_t, stream::ChartTile&, Batches& b) {
             b.vertices.first = first_vertex;
             b.faces.first = first_face;
-            for (uint64_t& i : b.faces.index) i += first_vertex;
+            for (uint64_t& i : b.faces.index)
+                i += first_vertex;
             sink->Vertices(b.vertices);
             sink->Faces(b.faces);
             first_vertex += b.vertices.size();
@@ -109,7 +112,8 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
             CheckCounts(view, c, tile);
             std::vector<Vec2f> uv;
             uv.reserve(tile.uv.size());
-            for (const Vec2f& u : tile.uv) uv.push_back(atlas.AtlasUv(c, u));
+            for (const Vec2f& u : tile.uv)
+                uv.push_back(atlas.AtlasUv(c, u));
             return uv;
         },
         [&](uint32_t c, stream::ChartTile& tile, std::vector<Vec2f>& uv) {
@@ -121,7 +125,8 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
             const uint32_t base = glb.AddVertices(tile.position, tile.normal, uv);
             tris = tile.triangles;
             for (auto& t : tris)
-                for (uint32_t& v : t) v += base;
+                for (uint32_t& v : t)
+                    v += base;
             glb.AddTriangles(tris);
             st.vertices += tile.position.size();
             st.triangles += tile.triangles.size();
@@ -136,17 +141,22 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
 Vec2f BottomLeftUv(const Atlas& atlas, uint32_t chart, Vec2f uv) {
     const Vec2f a = atlas.AtlasUv(chart, uv);
     const uint32_t p = atlas.charts[chart].page;
-    if (atlas.pages.size() <= 1) return Vec2f(a.x, 1 - a.y);
+    if (atlas.pages.size() <= 1)
+        return Vec2f(a.x, 1 - a.y);
     return Vec2f(a.x + float(p % 10), (1 - a.y) + float(p / 10));
 }
 
 MeshExportStats WriteBakedMesh(const BakeView& view, const Atlas& atlas, const std::string& path,
                                const MeshExportOptions& options) {
     std::string ext = path == "-" ? ".ply" : std::filesystem::path(path).extension().string();
-    for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    if (ext == ".glb") return WriteGlb(view, atlas, path, options);
-    if (ext == ".ply") return WriteLinear(view, atlas, path, io::MeshFormat::Ply, options);
-    if (ext == ".obj") return WriteLinear(view, atlas, path, io::MeshFormat::Obj, options);
+    for (char& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext == ".glb")
+        return WriteGlb(view, atlas, path, options);
+    if (ext == ".ply")
+        return WriteLinear(view, atlas, path, io::MeshFormat::Ply, options);
+    if (ext == ".obj")
+        return WriteLinear(view, atlas, path, io::MeshFormat::Obj, options);
     UsageError("{}: expected a .glb, .ply or .obj file name", path);
 }
 

@@ -14,22 +14,22 @@
 // accordingly (lightmap.PagePath).
 #pragma once
 
-#include <cstdint>
-#include <string>
-
 #include "io/gltf_writer.h"
 #include "io/mesh_stream.h"
 #include "solve/atlas.h"
 #include "solve/bake_view.h"
 #include "solve/tonemap.h"
 
+#include <cstdint>
+#include <string>
+
 namespace mebake::solve {
 
 struct MeshExportOptions {
     io::GlbLightMapMode glb_mode = io::GlbLightMapMode::Emissive;
-    ToneMap tone;                   // the light map embedded in a .glb
+    ToneMap tone;  // the light map embedded in a .glb
     io::PlyEncoding ply_encoding = io::PlyEncoding::BinaryLittleEndian;
-    std::string temp_dir;           // spill files; empty: $TMPDIR or /tmp
+    std::string temp_dir;  // spill files; empty: $TMPDIR or /tmp
 };
 
 struct MeshExportStats {

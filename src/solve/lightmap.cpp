@@ -1,15 +1,15 @@
 #include "solve/lightmap.h"
 
+#include "core/check.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "io/png_writer.h"
+
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <memory>
 #include <numbers>
-
-#include "core/check.h"
-#include "core/error.h"
-#include "core/parallel.h"
-#include "io/png_writer.h"
 
 namespace mebake::solve {
 
@@ -20,7 +20,8 @@ constexpr float kPi = float(std::numbers::pi);
 
 std::string Extension(const std::string& path) {
     std::string e = std::filesystem::path(path).extension().string();
-    for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    for (char& c : e)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
     return e;
 }
 
@@ -51,10 +52,13 @@ ShelfCharts LoadShelf(const BakeView& view, const Atlas& atlas, const AtlasShelf
 
 }  // namespace
 
-int MapChannels(MapContent content) { return content == MapContent::Radiosity ? 4 : 9; }
+int MapChannels(MapContent content) {
+    return content == MapContent::Radiosity ? 4 : 9;
+}
 
 std::vector<std::string> MapChannelNames(MapContent content) {
-    if (content == MapContent::Radiosity) return {"R", "G", "B", "A"};
+    if (content == MapContent::Radiosity)
+        return {"R", "G", "B", "A"};
     std::vector<std::string> names;
     for (const char* axis : {"x", "y", "z"})
         for (const char* colour : {"R", "G", "B"})
@@ -84,7 +88,8 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
                 Vec3f e[3];
                 shader.Irradiance(uv, e);
                 for (int axis = 0; axis < 3; ++axis)
-                    for (int c = 0; c < 3; ++c) px[axis * 3 + c] = e[c][axis];
+                    for (int c = 0; c < 3; ++c)
+                        px[axis * 3 + c] = e[c][axis];
             }
         }
         for (uint32_t bx = 0; bx < g; ++bx) {
@@ -126,7 +131,8 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
                 const uint32_t c = shelf.charts[k];
                 const AtlasChart& ac = atlas.charts[c];
                 const uint32_t by = y + r - ac.y;
-                if (by >= atlas.block(c)) return;  // a smaller block than the shelf's height
+                if (by >= atlas.block(c))
+                    return;  // a smaller block than the shelf's height
                 float* out = band.data() + size_t(r) * stride + size_t(ac.x) * nc;
                 FillChartBlock(*charts.shaders[k], atlas, c, content, by, by + 1, out, stride);
             });
@@ -138,7 +144,8 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
 }
 
 std::string PagePath(const std::string& path, uint32_t page, uint32_t pages) {
-    if (pages <= 1) return path;
+    if (pages <= 1)
+        return path;
     std::filesystem::path p(path);
     const std::string ext = p.extension().string();
     p.replace_extension();
@@ -151,12 +158,15 @@ namespace {
 void ToneMapBand(std::span<const float> pixels, const ToneMap& tone, std::vector<uint8_t>& out) {
     const size_t texels = pixels.size() / 4;
     out.resize(texels * 3);
-    ParallelForRange(0, int64_t(texels), [&](int64_t lo, int64_t hi) {
-        for (int64_t t = lo; t < hi; ++t) {
-            const float* p = &pixels[size_t(t) * 4];
-            ToneMapPixel(Vec3f(p[0], p[1], p[2]) / kPi, tone, &out[size_t(t) * 3]);
-        }
-    }, 4096);
+    ParallelForRange(
+        0, int64_t(texels),
+        [&](int64_t lo, int64_t hi) {
+            for (int64_t t = lo; t < hi; ++t) {
+                const float* p = &pixels[size_t(t) * 4];
+                ToneMapPixel(Vec3f(p[0], p[1], p[2]) / kPi, tone, &out[size_t(t) * 3]);
+            }
+        },
+        4096);
 }
 
 void WritePngPage(const BakeView& view, const Atlas& atlas, uint32_t page, const ToneMap& tone,
@@ -204,10 +214,10 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
                                 "chart texels"
                               : "mebake vector irradiance E (W/m^2, world axes): layers E.x E.y "
                                 "E.z, channels R G B";
-            eo.attributes = {{"mebakeContent",
-                              content == MapContent::Radiosity ? "radiosity" : "irradiance"},
-                             {"mebakePage", fmt::format("{} of {}", p + 1, pages)},
-                             {"mebakeGutter", std::to_string(atlas.gutter)}};
+            eo.attributes = {
+                {"mebakeContent", content == MapContent::Radiosity ? "radiosity" : "irradiance"},
+                {"mebakePage", fmt::format("{} of {}", p + 1, pages)},
+                {"mebakeGutter", std::to_string(atlas.gutter)}};
             io::ExrWriter w(file, int(pg.width), int(pg.height), MapChannelNames(content), eo);
             ComputePage(view, atlas, p, content,
                         [&](std::span<const float> pixels, uint32_t, uint32_t rows) {

@@ -17,16 +17,16 @@
 // `mebake render` uses, so a viewer showing it as emission matches the rendered views.
 #pragma once
 
+#include "io/exr_writer.h"
+#include "solve/atlas.h"
+#include "solve/bake_view.h"
+#include "solve/tonemap.h"
+
 #include <cstdint>
 #include <functional>
 #include <span>
 #include <string>
 #include <vector>
-
-#include "io/exr_writer.h"
-#include "solve/atlas.h"
-#include "solve/bake_view.h"
-#include "solve/tonemap.h"
 
 namespace mebake::solve {
 
@@ -37,8 +37,8 @@ std::vector<std::string> MapChannelNames(MapContent content);
 
 // Receives rows [first_row, first_row + rows) of a page, pixel-major, MapChannels floats
 // per texel, top to bottom with no gaps.
-using PageSink = std::function<void(std::span<const float> pixels, uint32_t first_row,
-                                    uint32_t rows)>;
+using PageSink =
+    std::function<void(std::span<const float> pixels, uint32_t first_row, uint32_t rows)>;
 
 // Computes one page and streams it to `sink` in bands of at most band_rows rows.
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,

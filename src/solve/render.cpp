@@ -1,17 +1,17 @@
 #include "solve/render.h"
 
+#include "core/check.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "io/png_writer.h"
+#include "solve/visibility.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <memory>
 #include <numbers>
-
-#include "core/check.h"
-#include "core/error.h"
-#include "core/parallel.h"
-#include "io/png_writer.h"
-#include "solve/visibility.h"
 
 namespace mebake::solve {
 
@@ -22,13 +22,15 @@ constexpr float kPi = float(std::numbers::pi);
 
 Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
     switch (sky.type) {
-    case Sky::Type::Uniform: return Vec3f(sky.radiance);
+    case Sky::Type::Uniform:
+        return Vec3f(sky.radiance);
     case Sky::Type::Overcast: {
         // CIE overcast: L(theta) = Lz (1 + 2 cos theta) / 3 above the horizon.
         const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
         return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
     }
-    case Sky::Type::None: break;
+    case Sky::Type::None:
+        break;
     }
     return Vec3f{};
 }
@@ -59,8 +61,10 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const Camera& cam = opt.camera;
     if (cam.width < 1 || cam.height < 1 || cam.width > 16384 || cam.height > 16384)
         UsageError("--size {}x{}: each side must be 1 to 16384 pixels", cam.width, cam.height);
-    if (!(cam.fov > 0 && cam.fov < 180)) UsageError("--fov {}: expected (0, 180) degrees", cam.fov);
-    if (opt.samples < 1 || opt.samples > 16) UsageError("--samples {}: expected 1 to 16", opt.samples);
+    if (!(cam.fov > 0 && cam.fov < 180))
+        UsageError("--fov {}: expected (0, 180) degrees", cam.fov);
+    if (opt.samples < 1 || opt.samples > 16)
+        UsageError("--samples {}: expected 1 to 16", opt.samples);
     const Vec3d forward = Normalize(cam.target - cam.eye);
     const Vec3d right = Normalize(Cross(forward, cam.up));
     if (!(Dot(forward, forward) > 0) || !(Dot(right, right) > 0))
@@ -85,11 +89,14 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     std::vector<uint32_t> idx;
     for (size_t c = 0; c < n; ++c) {
         const auto& tile = tiles[c];
-        if (tile.triangles.empty()) continue;
+        if (tile.triangles.empty())
+            continue;
         xyz.clear();
         idx.clear();
-        for (const Vec3f& p : tile.position) xyz.insert(xyz.end(), {p.x, p.y, p.z});
-        for (const auto& t : tile.triangles) idx.insert(idx.end(), t.begin(), t.end());
+        for (const Vec3f& p : tile.position)
+            xyz.insert(xyz.end(), {p.x, p.y, p.z});
+        for (const auto& t : tile.triangles)
+            idx.insert(idx.end(), t.begin(), t.end());
         const uint32_t id = vis.AddTriangles(xyz, idx, "chart");
         CHECK_EQ(id, geom_chart.size());
         geom_chart.push_back(uint32_t(c));
@@ -115,10 +122,12 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 for (int sx = 0; sx < k; ++sx, ++r) {
                     const double x = (px + (sx + 0.5) / k) / cam.width * 2 - 1;
                     const double y = 1 - (double(py) + (sy + 0.5) / k) / cam.height * 2;
-                    const Vec3d d = forward + right * (x * tan_half * aspect) + cam_up * (y * tan_half);
+                    const Vec3d d =
+                        forward + right * (x * tan_half * aspect) + cam_up * (y * tan_half);
                     dirs[r] = Vec3f(Normalize(d));
-                    segs[r] = Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
-                                      dirs[r].x, dirs[r].y, dirs[r].z, INFINITY};
+                    segs[r] =
+                        Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
+                                dirs[r].x,        dirs[r].y,        dirs[r].z,        INFINITY};
                 }
         vis.Intersect(segs, hits);
         uint64_t count = 0;
@@ -138,19 +147,22 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) / kPi;
             }
             float* out = &img.rgb[(size_t(py) * size_t(cam.width) + size_t(px)) * 3];
-            for (int c = 0; c < 3; ++c) out[c] = sum[c] * weight;
+            for (int c = 0; c < 3; ++c)
+                out[c] = sum[c] * weight;
         }
         row_hits[size_t(py)] = count;
     });
     img.rays = uint64_t(per_row) * uint64_t(cam.height);
-    for (uint64_t h : row_hits) img.hits += h;
+    for (uint64_t h : row_hits)
+        img.hits += h;
     return img;
 }
 
 void WriteRenderedImage(const RenderedImage& image, const std::string& path, const ToneMap& tone,
                         io::ExrPixelType exr_type) {
     std::string ext = path == "-" ? ".exr" : std::filesystem::path(path).extension().string();
-    for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    for (char& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
     if (ext == ".exr") {
         io::ExrOptions eo;
         eo.type = exr_type;
@@ -158,7 +170,8 @@ void WriteRenderedImage(const RenderedImage& image, const std::string& path, con
         io::WriteExr(path, image.width, image.height, {"R", "G", "B"}, image.rgb, eo);
         return;
     }
-    if (ext != ".png") UsageError("{}: expected a .exr or .png file name", path);
+    if (ext != ".png")
+        UsageError("{}: expected a .exr or .png file name", path);
     std::vector<uint8_t> bytes(image.rgb.size());
     for (size_t p = 0; p < image.rgb.size() / 3; ++p)
         ToneMapPixel(Vec3f(image.rgb[3 * p], image.rgb[3 * p + 1], image.rgb[3 * p + 2]), tone,

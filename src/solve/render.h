@@ -12,21 +12,21 @@
 // shading), like the visibility scene of a full-resolution solve.
 #pragma once
 
-#include <cstdint>
-#include <optional>
-#include <string>
-#include <vector>
-
 #include "core/vec.h"
 #include "io/exr_writer.h"
 #include "solve/bake_view.h"
 #include "solve/tonemap.h"
 
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
 namespace mebake::solve {
 
 struct Camera {
     Vec3d eye{0, 0, 1}, target{0, 0, 0}, up{0, 1, 0};
-    double fov = 50;          // vertical field of view, degrees, in (0, 180)
+    double fov = 50;  // vertical field of view, degrees, in (0, 180)
     int width = 800, height = 600;
 };
 

@@ -1,12 +1,12 @@
 #include "solve/seams.h"
 
+#include "core/check.h"
+#include "core/error.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <unordered_map>
-
-#include "core/check.h"
-#include "core/error.h"
 
 namespace mebake::solve {
 
@@ -14,11 +14,13 @@ namespace {
 
 constexpr int kMaxSamples = 16;
 
-float Luminance(const Vec3f& b) { return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z; }
+float Luminance(const Vec3f& b) {
+    return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z;
+}
 
 struct EdgeSamples {
-    uint64_t g0 = 0, g1 = 0;                // g0 < g1
-    std::array<float, kMaxSamples> y{};     // luminance at the samples, from g0 to g1
+    uint64_t g0 = 0, g1 = 0;             // g0 < g1
+    std::array<float, kMaxSamples> y{};  // luminance at the samples, from g0 to g1
 };
 
 struct KeyHash {
@@ -45,7 +47,8 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
     for (uint32_t t = 0; t < tile.triangles.size(); ++t)
         for (int k = 0; k < 3; ++k) {
             uint32_t a = tile.triangles[t][size_t(k)], b = tile.triangles[t][size_t((k + 1) % 3)];
-            if (a > b) std::swap(a, b);
+            if (a > b)
+                std::swap(a, b);
             edges.push_back({a, b, t});
         }
     std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) {
@@ -57,13 +60,16 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
     std::vector<EdgeSamples> out;
     for (size_t i = 0; i < edges.size();) {
         size_t j = i;
-        while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b) ++j;
+        while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b)
+            ++j;
         const E e = edges[i];
         const bool outline = j - i == 1;
         i = j;
-        if (!outline || e.a == e.b) continue;
+        if (!outline || e.a == e.b)
+            continue;
         uint64_t ga = tile.vertex_id[e.a], gb = tile.vertex_id[e.b];
-        if (ga >= nv || gb >= nv || ga == gb) continue;
+        if (ga >= nv || gb >= nv || ga == gb)
+            continue;
         uint32_t v0 = e.a, v1 = e.b;
         if (ga > gb) {
             std::swap(ga, gb);
@@ -81,7 +87,8 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
             float b[3] = {0, 0, 0};
             b[i0] = 1 - t;
             b[i1] = t;
-            s.y[size_t(k)] = Luminance(shader.Radiosity(shader.AtTriangle(e.tri, b[0], b[1], b[2])));
+            s.y[size_t(k)] =
+                Luminance(shader.Radiosity(shader.AtTriangle(e.tri, b[0], b[1], b[2])));
         }
         out.push_back(s);
     }
@@ -104,7 +111,9 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     SeamStats st;
     ForEachTile(
         view, AllCharts(view), stream::TileParts::Mesh,
-        [&](uint32_t c, stream::ChartTile& tile) { return SampleOutline(view, c, tile, opt.samples); },
+        [&](uint32_t c, stream::ChartTile& tile) {
+            return SampleOutline(view, c, tile, opt.samples);
+        },
         [&](uint32_t c, stream::ChartTile&, std::vector<EdgeSamples>& edges) {
             for (const EdgeSamples& e : edges) {
                 const auto key = std::make_pair(e.g0, e.g1);
@@ -113,7 +122,8 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
                     waiting.emplace(key, Waiting{c, e.y});
                     continue;
                 }
-                if (it->second.chart == c) continue;  // a split vertex inside one chart
+                if (it->second.chart == c)
+                    continue;  // a split vertex inside one chart
                 const uint32_t edge = uint32_t(compared.size());
                 compared.push_back(key);
                 for (size_t k = 0; k < ns; ++k) {
@@ -126,9 +136,11 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     st.seam_edges = compared.size();
     st.open_edges = waiting.size();
     st.samples = samples.size();
-    if (samples.empty()) return st;
+    if (samples.empty())
+        return st;
     double level = 0;
-    for (const Sample& s : samples) level += s.level;
+    for (const Sample& s : samples)
+        level += s.level;
     st.mean_level = level / double(samples.size());
     const double floor = std::max(1e-3 * st.mean_level, 1e-30);
     std::vector<double> rel(samples.size());
@@ -143,7 +155,8 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
         }
     }
     st.mean_relative = sum / double(samples.size());
-    const size_t q = std::min(samples.size() - 1, size_t(std::ceil(0.95 * double(samples.size()))) - 1);
+    const size_t q =
+        std::min(samples.size() - 1, size_t(std::ceil(0.95 * double(samples.size()))) - 1);
     std::nth_element(rel.begin(), rel.begin() + ptrdiff_t(q), rel.end());
     st.p95_relative = rel[q];
     return st;

@@ -15,9 +15,9 @@
 // Memory: the outline edges still waiting for their other side, and 8 bytes per sample.
 #pragma once
 
-#include <cstdint>
-
 #include "solve/bake_view.h"
+
+#include <cstdint>
 
 namespace mebake::solve {
 
@@ -26,13 +26,13 @@ struct SeamOptions {
 };
 
 struct SeamStats {
-    uint64_t seam_edges = 0;     // edge pairs compared
-    uint64_t open_edges = 0;     // outline edges with no other chart (mesh borders)
+    uint64_t seam_edges = 0;  // edge pairs compared
+    uint64_t open_edges = 0;  // outline edges with no other chart (mesh borders)
     uint64_t samples = 0;
-    double mean_relative = 0;    // mean relative jump over all samples
-    double p95_relative = 0;     // 95th percentile
+    double mean_relative = 0;  // mean relative jump over all samples
+    double p95_relative = 0;   // 95th percentile
     double max_relative = 0;
-    double mean_level = 0;       // mean luminance of B on seams (W/m^2)
+    double mean_level = 0;                // mean luminance of B on seams (W/m^2)
     uint64_t worst_v0 = 0, worst_v1 = 0;  // global vertex ids of the worst edge
 };
 

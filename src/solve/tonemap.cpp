@@ -6,21 +6,31 @@
 namespace mebake::solve {
 
 std::optional<ToneCurve> ParseToneCurve(const std::string& name) {
-    if (name == "filmic") return ToneCurve::Filmic;
-    if (name == "reinhard") return ToneCurve::Reinhard;
-    if (name == "clamp") return ToneCurve::Clamp;
+    if (name == "filmic")
+        return ToneCurve::Filmic;
+    if (name == "reinhard")
+        return ToneCurve::Reinhard;
+    if (name == "clamp")
+        return ToneCurve::Clamp;
     return std::nullopt;
 }
 
 float ApplyToneCurve(float radiance, const ToneMap& tm) {
     const float x = radiance * std::exp2(tm.exposure);
-    if (!(x > 0)) return 0;  // also NaN
+    if (!(x > 0))
+        return 0;  // also NaN
     float y;
     switch (tm.curve) {
-    case ToneCurve::Filmic: y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f); break;
-    case ToneCurve::Reinhard: y = std::isinf(x) ? 1.f : x / (1 + x); break;
+    case ToneCurve::Filmic:
+        y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
+        break;
+    case ToneCurve::Reinhard:
+        y = std::isinf(x) ? 1.f : x / (1 + x);
+        break;
     case ToneCurve::Clamp:
-    default: y = x; break;
+    default:
+        y = x;
+        break;
     }
     return std::isnan(y) ? 1.f : std::clamp(y, 0.f, 1.f);
 }
@@ -35,7 +45,8 @@ uint8_t ToSrgb8(float display_linear) {
 }
 
 void ToneMapPixel(const Vec3f& radiance, const ToneMap& tm, uint8_t out[3]) {
-    for (int c = 0; c < 3; ++c) out[c] = ToSrgb8(ApplyToneCurve(radiance[c], tm));
+    for (int c = 0; c < 3; ++c)
+        out[c] = ToSrgb8(ApplyToneCurve(radiance[c], tm));
 }
 
 }  // namespace mebake::solve

@@ -9,11 +9,11 @@
 //   Clamp    min(x, 1): linear, for exact values in tests and for already display-ready data.
 #pragma once
 
+#include "core/vec.h"
+
 #include <cstdint>
 #include <optional>
 #include <string>
-
-#include "core/vec.h"
 
 namespace mebake::solve {
 

@@ -1,21 +1,20 @@
 #include "solve/vertex_colors.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <array>
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
-#include <memory>
-#include <numbers>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "core/paged_file.h"
 #include "io/mesh_format.h"
 #include "stream/spill.h"
 #include "stream/trimesh.h"
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fcntl.h>
+#include <memory>
+#include <numbers>
+#include <unistd.h>
 
 namespace mebake::solve {
 
@@ -46,7 +45,8 @@ std::unique_ptr<DiskArray<T>> TempArray(const std::string& temp_dir, size_t cach
     std::vector<char> name(tmpl.begin(), tmpl.end());
     name.push_back('\0');
     int fd = ::mkostemp(name.data(), O_CLOEXEC);
-    if (fd < 0) IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
+    if (fd < 0)
+        IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
     ::close(fd);
     auto a = std::make_unique<DiskArray<T>>(name.data(), true, cache_bytes);
     ::unlink(name.data());
@@ -91,7 +91,8 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
         [&](uint32_t c, stream::ChartTile& tile, TileColors& tc) {
             for (size_t v = 0; v < tile.vertex_id.size(); ++v) {
                 const uint64_t id = tile.vertex_id[v];
-                if (id >= nv) continue;  // a vertex repair added
+                if (id >= nv)
+                    continue;  // a vertex repair added
                 Accum a = accum->Get(id);
                 a.r += tc.radiosity[v].x;
                 a.g += tc.radiosity[v].y;
@@ -105,7 +106,8 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
                     continue;
                 }
                 Face f;
-                for (int k = 0; k < 3; ++k) f[size_t(k)] = tile.vertex_id[tile.triangles[t][size_t(k)]];
+                for (int k = 0; k < 3; ++k)
+                    f[size_t(k)] = tile.vertex_id[tile.triangles[t][size_t(k)]];
                 if (f[0] >= nv || f[1] >= nv || f[2] >= nv)
                     CorruptError({view.TilePath(c)}, "input triangle {} names a vertex beyond {}",
                                  tile.face_id[t], nv);
@@ -143,7 +145,8 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
             if (a.count > 0) {
                 radiance = Vec3f(a.r, a.g, a.b) / float(a.count) / kPi;
                 ++st.referenced;
-                if (a.count > 1) ++st.shared;
+                if (a.count > 1)
+                    ++st.shared;
             }
             if (opt.float_colors) {
                 vb.color.push_back(radiance * std::exp2(opt.tone.exposure));

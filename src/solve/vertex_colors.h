@@ -17,12 +17,12 @@
 // so the PLY streams without a spill of its own (faces are spilled once by this pass).
 #pragma once
 
-#include <cstdint>
-#include <string>
-
 #include "io/mesh_stream.h"
 #include "solve/bake_view.h"
 #include "solve/tonemap.h"
+
+#include <cstdint>
+#include <string>
 
 namespace mebake::solve {
 
@@ -30,16 +30,16 @@ struct VertexColorOptions {
     ToneMap tone;
     bool float_colors = false;
     io::PlyEncoding ply_encoding = io::PlyEncoding::BinaryLittleEndian;
-    std::string temp_dir;                    // spill files; empty: $TMPDIR or /tmp
-    size_t cache_bytes = size_t(64) << 20;   // page cache of each disk array
+    std::string temp_dir;                   // spill files; empty: $TMPDIR or /tmp
+    size_t cache_bytes = size_t(64) << 20;  // page cache of each disk array
 };
 
 struct VertexColorStats {
-    uint64_t vertices = 0;        // written (= the input's vertex count)
-    uint64_t referenced = 0;      // of them, coloured from at least one chart
-    uint64_t shared = 0;          // of them, in more than one chart (averaged)
-    uint64_t faces = 0;           // written
-    uint64_t hole_fill_faces = 0; // dropped
+    uint64_t vertices = 0;         // written (= the input's vertex count)
+    uint64_t referenced = 0;       // of them, coloured from at least one chart
+    uint64_t shared = 0;           // of them, in more than one chart (averaged)
+    uint64_t faces = 0;            // written
+    uint64_t hole_fill_faces = 0;  // dropped
 };
 
 // Writes to `path` ("-" = stdout). Throws Error(Corrupt) when vertices.bin or a tile

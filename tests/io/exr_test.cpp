@@ -2,17 +2,16 @@
 // precision, saturating instead of overflowing), channel names, compression and header
 // attributes, band-by-band writing, no file without Commit(), and exrheader/exrinfo
 // accepting the files when the openexr tools are installed.
+#include "core/error.h"
 #include "io/exr_writer.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-
-#include "core/error.h"
+#include <unistd.h>
 
 namespace mebake::io {
 namespace {
@@ -32,7 +31,8 @@ protected:
     // w x h pixels of nc channels with distinct values (some negative, some fractional).
     static std::vector<float> Pattern(int w, int h, int nc) {
         std::vector<float> v(size_t(w) * h * nc);
-        for (size_t i = 0; i < v.size(); ++i) v[i] = float(i) * 0.37f - 3.5f;
+        for (size_t i = 0; i < v.size(); ++i)
+            v[i] = float(i) * 0.37f - 3.5f;
         return v;
     }
 
@@ -63,7 +63,8 @@ TEST_F(ExrTest, FloatRoundTripIsExact) {
     }
     auto attr = [&](const std::string& key) {
         for (const auto& [k, v] : img.string_attributes)
-            if (k == key) return v;
+            if (k == key)
+                return v;
         return std::string("<absent>");
     };
     EXPECT_EQ(attr("software"), "mebake");
@@ -75,9 +76,10 @@ TEST_F(ExrTest, HalfInBandsWithManyChannels) {
     const int w = 33, h = 21;
     std::vector<std::string> names;
     for (const char* a : {"x", "y", "z"})
-        for (const char* c : {"R", "G", "B"}) names.push_back(std::string("E.") + a + "." + c);
+        for (const char* c : {"R", "G", "B"})
+            names.push_back(std::string("E.") + a + "." + c);
     auto px = Pattern(w, h, 9);
-    px[5] = 1e6f;    // saturates at the half maximum
+    px[5] = 1e6f;  // saturates at the half maximum
     px[6] = -1e6f;
     ExrWriter wr(Path("h.exr"), w, h, names);
     int y = 0;

@@ -1,19 +1,18 @@
 // .glb writer: container layout (magic, chunk lengths and alignment), JSON contents
 // (accessor counts, POSITION min/max, materials in both light-map modes), binary data read
 // back through the accessors, and the Khronos validator when it is installed.
+#include "core/error.h"
+#include "gltf_validate.h"
 #include "io/gltf_writer.h"
+#include "io/png_writer.h"
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
-
-#include "core/error.h"
-#include "gltf_validate.h"
-#include "io/png_writer.h"
 
 namespace mebake::io {
 namespace {
@@ -58,7 +57,8 @@ std::vector<T> ReadAccessor(const Glb& g, size_t a, int components) {
     const json& view = g.j["bufferViews"][acc["bufferView"].get<size_t>()];
     const size_t off = view["byteOffset"].get<size_t>() + acc.value("byteOffset", size_t(0));
     const size_t n = acc["count"].get<size_t>() * size_t(components);
-    EXPECT_LE(off + n * sizeof(T), view["byteOffset"].get<size_t>() + view["byteLength"].get<size_t>());
+    EXPECT_LE(off + n * sizeof(T),
+              view["byteOffset"].get<size_t>() + view["byteLength"].get<size_t>());
     std::vector<T> out(n);
     std::memcpy(out.data(), g.bin.data() + off, n * sizeof(T));
     return out;
@@ -100,7 +100,8 @@ TEST(Glb, LayoutAndAccessors) {
     const Glb g = Parse(bytes);
     const json& j = g.j;
     EXPECT_EQ(j["asset"]["version"], "2.0");
-    for (const auto& v : j["bufferViews"]) EXPECT_EQ(v["byteOffset"].get<size_t>() % 4, 0u);
+    for (const auto& v : j["bufferViews"])
+        EXPECT_EQ(v["byteOffset"].get<size_t>() % 4, 0u);
     const auto& prims = j["meshes"][0]["primitives"];
     ASSERT_EQ(prims.size(), 2u);
     const size_t a_pos = prims[0]["attributes"]["POSITION"], a_idx = prims[0]["indices"];
@@ -132,7 +133,8 @@ TEST(Glb, LayoutAndAccessors) {
     const json& iv = j["bufferViews"][j["images"][0]["bufferView"].get<size_t>()];
     const auto png = TinyPng();
     ASSERT_EQ(iv["byteLength"].get<size_t>(), png.size());
-    EXPECT_EQ(0, std::memcmp(g.bin.data() + iv["byteOffset"].get<size_t>(), png.data(), png.size()));
+    EXPECT_EQ(0,
+              std::memcmp(g.bin.data() + iv["byteOffset"].get<size_t>(), png.data(), png.size()));
     EXPECT_EQ(DecodePng(png).width, 2);
 }
 
@@ -155,8 +157,8 @@ TEST(Glb, EmptyMeshIsStillAFile) {
 }
 
 TEST(Glb, PassesTheKhronosValidator) {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("mebake-gltf-" + std::to_string(::getpid()));
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("mebake-gltf-" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     bool ran = false;
     for (auto mode : {GlbLightMapMode::Emissive, GlbLightMapMode::Unlit}) {
@@ -166,13 +168,15 @@ TEST(Glb, PassesTheKhronosValidator) {
         out->Write(bytes.data(), bytes.size());
         out->Commit();
         auto v = testing::ValidateGltf(file);
-        if (!v) break;
+        if (!v)
+            break;
         ran = true;
         EXPECT_EQ(v->exit_code, 0) << v->report;
         EXPECT_NE(v->report.find("\"numErrors\": 0"), std::string::npos) << v->report;
     }
     std::filesystem::remove_all(dir);
-    if (!ran) GTEST_SKIP() << "node or the gltf-validator package is not installed";
+    if (!ran)
+        GTEST_SKIP() << "node or the gltf-validator package is not installed";
 }
 
 }  // namespace

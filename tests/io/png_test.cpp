@@ -1,20 +1,20 @@
 // PNG writer: decodes (libpng) to the same bytes, row bands, an sRGB chunk, RGBA, writes
 // through files and memory, and malformed PNGs are input errors naming the source.
+#include "core/error.h"
 #include "io/png_writer.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
-
-#include "core/error.h"
+#include <unistd.h>
 
 namespace mebake::io {
 namespace {
 
 std::vector<uint8_t> Pattern(int w, int h, int nc) {
     std::vector<uint8_t> v(size_t(w) * h * nc);
-    for (size_t i = 0; i < v.size(); ++i) v[i] = uint8_t((i * 37 + i / 7) & 0xFF);
+    for (size_t i = 0; i < v.size(); ++i)
+        v[i] = uint8_t((i * 37 + i / 7) & 0xFF);
     return v;
 }
 
@@ -36,8 +36,8 @@ TEST(Png, RoundTripRgbInBands) {
 }
 
 TEST(Png, RgbaToAFile) {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("mebake-png-" + std::to_string(::getpid()));
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("mebake-png-" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const std::string path = (dir / "a.png").string();
     const auto px = Pattern(5, 3, 4);

@@ -3,11 +3,11 @@
 // mapping and its texel inverse agree.
 #include "solve/atlas.h"
 
+#include "core/error.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "core/error.h"
 
 namespace mebake::solve {
 namespace {
@@ -22,7 +22,9 @@ std::vector<uint32_t> RandomResolutions(size_t n, uint32_t seed) {
     return r;
 }
 
-bool IsPow2(uint32_t x) { return x && !(x & (x - 1)); }
+bool IsPow2(uint32_t x) {
+    return x && !(x & (x - 1));
+}
 
 void ExpectValid(const Atlas& a, std::span<const uint32_t> res, const AtlasOptions& opt) {
     ASSERT_EQ(a.charts.size(), res.size());
@@ -47,9 +49,11 @@ void ExpectValid(const Atlas& a, std::span<const uint32_t> res, const AtlasOptio
     for (size_t c = 0; c < res.size(); ++c)
         for (size_t d = c + 1; d < res.size(); ++d) {
             const auto &p = a.charts[c], &q = a.charts[d];
-            if (p.page != q.page) continue;
+            if (p.page != q.page)
+                continue;
             const uint32_t bp = a.block(uint32_t(c)), bq = a.block(uint32_t(d));
-            const bool apart = p.x + bp <= q.x || q.x + bq <= p.x || p.y + bp <= q.y || q.y + bq <= p.y;
+            const bool apart =
+                p.x + bp <= q.x || q.x + bq <= p.x || p.y + bp <= q.y || q.y + bq <= p.y;
             EXPECT_TRUE(apart) << "charts " << c << " and " << d << " overlap";
         }
     // Shelves list each chart once.
@@ -57,7 +61,8 @@ void ExpectValid(const Atlas& a, std::span<const uint32_t> res, const AtlasOptio
     for (const auto& p : a.pages)
         for (const auto& s : p.shelves) {
             listed += s.charts.size();
-            for (uint32_t c : s.charts) EXPECT_EQ(a.charts[c].y, s.y);
+            for (uint32_t c : s.charts)
+                EXPECT_EQ(a.charts[c].y, s.y);
         }
     EXPECT_EQ(listed, res.size());
 }
@@ -132,7 +137,9 @@ TEST(Atlas, LargerChartsFirstTiesById) {
     const std::vector<uint32_t> res{8, 32, 8, 32};
     const Atlas a = PackAtlas(res, {});
     // Placement order = reading order of the page (shelf, then left to right).
-    auto rank = [&](uint32_t c) { return uint64_t(a.charts[c].y) << 32 | a.charts[c].x; };
+    auto rank = [&](uint32_t c) {
+        return uint64_t(a.charts[c].y) << 32 | a.charts[c].x;
+    };
     EXPECT_EQ(rank(1), 0u);
     EXPECT_LT(rank(1), rank(3));
     EXPECT_LT(rank(3), rank(0));

@@ -7,16 +7,6 @@
 //   chart 0: x in [0, 1], ids 0 1 3 4;  chart 1: x in [1, 2], ids 1 2 4 5;  uv = (x - x0, y)
 #pragma once
 
-#include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <array>
-#include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <string>
-#include <vector>
-
 #include "core/error.h"
 #include "core/paged_file.h"
 #include "io/mesh_stream.h"
@@ -28,13 +18,23 @@
 #include "stream/tile.h"
 #include "stream/trimesh.h"
 
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
 namespace mebake::solve::testing {
 
 constexpr float kAlbedo = 0.5f;
 
 struct ChartLight {
-    Vec3f a{2, 4, 6};   // E_z at u = 0, per colour
-    Vec3f b{0, 0, 0};   // slope of E_z along u
+    Vec3f a{2, 4, 6};  // E_z at u = 0, per colour
+    Vec3f b{0, 0, 0};  // slope of E_z along u
 };
 
 struct TinyBakeOptions {
@@ -53,14 +53,16 @@ inline std::string FreshDir(const std::string& name) {
 }
 
 inline Vec3f GlobalVertex(uint64_t id) {
-    if (id == 6) return Vec3f(5, 5, 5);
+    if (id == 6)
+        return Vec3f(5, 5, 5);
     return Vec3f(float(id % 3), float(id / 3), 0);
 }
 
 // The expected radiosity of chart c at u.
 inline Vec3f ExpectedB(const TinyBakeOptions& o, int c, double u) {
     Vec3f b;
-    for (int k = 0; k < 3; ++k) b[k] = kAlbedo * float(o.light[c].a[k] + o.light[c].b[k] * u);
+    for (int k = 0; k < 3; ++k)
+        b[k] = kAlbedo * float(o.light[c].a[k] + o.light[c].b[k] * u);
     return b;
 }
 
@@ -96,14 +98,16 @@ inline void WriteTinyBake(const std::string& dir, const TinyBakeOptions& o) {
         }
         t.triangles = {{0, 1, 3}, {0, 3, 2}};
         t.face_id = {2 * c, 2 * c + 1};
-        if (c == 1 && o.hole_fill_last) t.face_id[1] = stream::kNoId;
+        if (c == 1 && o.hole_fill_last)
+            t.face_id[1] = stream::kNoId;
         t.material = {0, 0};
         const int g = stream::DefaultGridResolution(t.triangles.size());
         t.grid = stream::BuildChartGrid(t.uv, t.triangles, g);
         const uint32_t r = o.resolution;
         t.geometry.resolution = r;
         int levels = 0;
-        while ((1u << levels) < r) ++levels;
+        while ((1u << levels) < r)
+            ++levels;
         t.geometry.levels.resize(size_t(levels) + 1);
         auto& fine = t.geometry.levels.back();
         fine.resize(size_t(r) * r);
@@ -146,14 +150,16 @@ inline void WriteTinyBake(const std::string& dir, const TinyBakeOptions& o) {
             float* z = f.value(0) + (3 * k + 2) * n;
             // a + b s = (a + b/2) P~0 + b / (2 sqrt 3) P~1(s).
             z[0] = o.light[c].a[k] + o.light[c].b[k] / 2;
-            if (o.order >= 1) z[CoeffIndex(o.order, 1, 0)] = o.light[c].b[k] / (2 * std::sqrt(3.f));
+            if (o.order >= 1)
+                z[CoeffIndex(o.order, 1, 0)] = o.light[c].b[k] / (2 * std::sqrt(3.f));
         }
         fields.push_back(std::move(f));
     }
     stream::WriteManifest(dir, m);
     {
         DiskArray<Vec3f> v(stream::Spill::VerticesPath(dir), true, 1 << 16);
-        for (uint64_t id = 0; id < 7; ++id) v.Push(GlobalVertex(id));
+        for (uint64_t id = 0; id < 7; ++id)
+            v.Push(GlobalVertex(id));
         v.Flush();
     }
     WriteSolution(SolutionPath(dir), fields, false);

@@ -2,16 +2,6 @@
 // uvs, embedded light map, Khronos validator), PLY/OBJ with light-map uvs (UDIM offsets
 // over several pages), and the per-vertex colour PLY (input order and count, averaging on
 // shared vertices, black unreferenced vertices, hole fills dropped).
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
-#include <cmath>
-#include <cstdio>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <numbers>
-
 #include "../io/gltf_validate.h"
 #include "bake_fixture.h"
 #include "io/byte_stream.h"
@@ -19,6 +9,16 @@
 #include "io/png_writer.h"
 #include "solve/export_mesh.h"
 #include "solve/vertex_colors.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
 
 namespace mebake::solve {
 namespace {
@@ -35,7 +35,8 @@ testing::MeshCollector ReadBack(const std::string& path, io::MeshFormat f) {
 
 std::vector<uint8_t> Slurp(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
-    return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)),
+                                std::istreambuf_iterator<char>());
 }
 
 class ExportTest : public ::testing::Test {
@@ -81,7 +82,8 @@ TEST_F(ExportTest, GlbWithEmbeddedLightMap) {
     const json& auv = j["accessors"][prims[0]["attributes"]["TEXCOORD_1"].get<size_t>()];
     const json& vuv = j["bufferViews"][auv["bufferView"].get<size_t>()];
     std::vector<float> uv(16);
-    std::memcpy(uv.data(), b.data() + bin + vuv["byteOffset"].get<size_t>() + auv.value("byteOffset", 0), 64);
+    std::memcpy(uv.data(),
+                b.data() + bin + vuv["byteOffset"].get<size_t>() + auv.value("byteOffset", 0), 64);
     for (uint32_t c = 0; c < 2; ++c)
         for (int v = 0; v < 4; ++v) {
             const Vec2f want = atlas_.AtlasUv(c, Vec2f(float(v & 1), float(v >> 1)));
@@ -90,8 +92,8 @@ TEST_F(ExportTest, GlbWithEmbeddedLightMap) {
         }
     // The light map decodes at the page's size.
     const json& iv = j["bufferViews"][j["images"][0]["bufferView"].get<size_t>()];
-    const io::PngImage png = io::DecodePng(std::span(b).subspan(
-        bin + iv["byteOffset"].get<size_t>(), iv["byteLength"].get<size_t>()));
+    const io::PngImage png = io::DecodePng(
+        std::span(b).subspan(bin + iv["byteOffset"].get<size_t>(), iv["byteLength"].get<size_t>()));
     EXPECT_EQ(uint32_t(png.width), atlas_.pages[0].width);
     EXPECT_EQ(uint32_t(png.height), atlas_.pages[0].height);
     if (auto v = mebake::testing::ValidateGltf(path)) {
@@ -117,7 +119,8 @@ TEST_F(ExportTest, PlyAndObjCarryBottomLeftUvs) {
         std::ifstream in(dir_ + "/m.obj");
         for (std::string line; std::getline(in, line);) {
             float s = 0, t = 0;
-            if (std::sscanf(line.c_str(), "vt %f %f", &s, &t) == 2) vt.push_back(Vec2f(s, t));
+            if (std::sscanf(line.c_str(), "vt %f %f", &s, &t) == 2)
+                vt.push_back(Vec2f(s, t));
         }
     }
     ASSERT_EQ(vt.size(), 8u);
@@ -172,8 +175,10 @@ TEST_F(ExportTest, VertexColorsInInputOrder) {
     for (uint64_t id = 0; id < 7; ++id) {
         EXPECT_EQ(m.position[id], testing::GlobalVertex(id));
         Vec3f b{};
-        for (auto [c, u] : uses[id]) b += testing::ExpectedB(opt_, c, u);
-        if (!uses[id].empty()) b = b / float(uses[id].size());
+        for (auto [c, u] : uses[id])
+            b += testing::ExpectedB(opt_, c, u);
+        if (!uses[id].empty())
+            b = b / float(uses[id].size());
         uint8_t want[3];
         ToneMapPixel(b / kPi, {}, want);
         for (int k = 0; k < 3; ++k)
@@ -195,7 +200,8 @@ TEST_F(ExportTest, VertexColorsInInputOrder) {
     const auto f = ReadBack(dir_ + "/vcf.ply", io::MeshFormat::Ply);
     EXPECT_TRUE(f.header.colors_are_float);
     const Vec3f b0 = testing::ExpectedB(opt_, 0, 0) / kPi * 0.25f;
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(f.color[0][k], b0[k], 1e-5);
+    for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(f.color[0][k], b0[k], 1e-5);
 }
 
 TEST_F(ExportTest, MissingVertexSpillIsAnError) {

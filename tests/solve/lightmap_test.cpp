@@ -3,17 +3,17 @@
 // EXR and PNG files and their page names, and thread-count determinism.
 #include "solve/lightmap.h"
 
+#include "bake_fixture.h"
+#include "core/parallel.h"
+#include "io/exr_writer.h"
+#include "io/png_writer.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <numbers>
-
-#include "bake_fixture.h"
-#include "core/parallel.h"
-#include "io/exr_writer.h"
-#include "io/png_writer.h"
 
 namespace mebake::solve {
 namespace {
@@ -37,14 +37,15 @@ Page Compute(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent
     p.height = atlas.pages[page].height;
     p.nc = MapChannels(content);
     uint32_t next = 0;
-    ComputePage(view, atlas, page, content,
-                [&](std::span<const float> px, uint32_t first, uint32_t rows) {
-                    EXPECT_EQ(first, next);
-                    EXPECT_EQ(px.size(), size_t(rows) * p.width * size_t(p.nc));
-                    p.px.insert(p.px.end(), px.begin(), px.end());
-                    next += rows;
-                },
-                band);
+    ComputePage(
+        view, atlas, page, content,
+        [&](std::span<const float> px, uint32_t first, uint32_t rows) {
+            EXPECT_EQ(first, next);
+            EXPECT_EQ(px.size(), size_t(rows) * p.width * size_t(p.nc));
+            p.px.insert(p.px.end(), px.begin(), px.end());
+            next += rows;
+        },
+        band);
     EXPECT_EQ(next, p.height);
     return p;
 }
@@ -53,8 +54,8 @@ class LightMapTest : public ::testing::Test {
 protected:
     void SetUp() override {
         dir_ = testing::FreshDir("lightmap");
-        opt_.light[0] = {Vec3f(2, 4, 6), Vec3f(1, -2, 3)};   // linear in u
-        opt_.light[1] = {Vec3f(3, 3, 3), Vec3f(0, 0, 0)};    // constant
+        opt_.light[0] = {Vec3f(2, 4, 6), Vec3f(1, -2, 3)};  // linear in u
+        opt_.light[1] = {Vec3f(3, 3, 3), Vec3f(0, 0, 0)};   // constant
         testing::WriteTinyBake(dir_, opt_);
         view_ = OpenBakeView(dir_);
         atlas_ = PackAtlas(ChartResolutions(view_), {});
@@ -126,8 +127,8 @@ TEST_F(LightMapTest, IrradianceChannels) {
         const double u = (i + 0.5) / r;
         const uint32_t x = ac.x + g + i, y = ac.y + g + 3;
         for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(p.At(x, y, c), 0, 1e-6);        // E.x
-            EXPECT_NEAR(p.At(x, y, 3 + c), 0, 1e-6);    // E.y
+            EXPECT_NEAR(p.At(x, y, c), 0, 1e-6);      // E.x
+            EXPECT_NEAR(p.At(x, y, 3 + c), 0, 1e-6);  // E.y
             const double ez = opt_.light[0].a[c] + opt_.light[0].b[c] * u;
             EXPECT_NEAR(p.At(x, y, 6 + c), ez, 1e-5 * (1 + std::abs(ez)));
         }
@@ -177,7 +178,8 @@ TEST_F(LightMapTest, ExrAndPngFiles) {
         EXPECT_TRUE(hi.half[size_t(ch)]);
         for (uint32_t y = 0; y < p.height; ++y)
             for (uint32_t x = 0; x < p.width; ++x)
-                ASSERT_NEAR(hi.At(int(x), int(y), ch), e.At(x, y, k), 1e-3 * (1 + std::abs(e.At(x, y, k))));
+                ASSERT_NEAR(hi.At(int(x), int(y), ch), e.At(x, y, k),
+                            1e-3 * (1 + std::abs(e.At(x, y, k))));
     }
 
     // PNG: the tone-mapped radiance B / pi.
@@ -191,9 +193,9 @@ TEST_F(LightMapTest, ExrAndPngFiles) {
     for (uint32_t y = 0; y < p.height; ++y)
         for (uint32_t x = 0; x < p.width; ++x) {
             uint8_t want[3];
-            ToneMapPixel(Vec3f(p.At(x, y, 0), p.At(x, y, 1), p.At(x, y, 2)) /
-                             float(std::numbers::pi),
-                         mo.tone, want);
+            ToneMapPixel(
+                Vec3f(p.At(x, y, 0), p.At(x, y, 1), p.At(x, y, 2)) / float(std::numbers::pi),
+                mo.tone, want);
             for (int k = 0; k < 3; ++k)
                 ASSERT_EQ(pi.pixels[(size_t(y) * p.width + x) * 3 + size_t(k)], want[k]);
         }
@@ -210,7 +212,8 @@ TEST_F(LightMapTest, PagesGetUdimNames) {
     ASSERT_EQ(files.size(), 2u);
     EXPECT_EQ(files[0], dir_ + "/lm.1001.exr");
     EXPECT_EQ(files[1], dir_ + "/lm.1002.exr");
-    for (const auto& f : files) EXPECT_TRUE(std::filesystem::exists(f));
+    for (const auto& f : files)
+        EXPECT_TRUE(std::filesystem::exists(f));
     EXPECT_FALSE(std::filesystem::exists(dir_ + "/lm.exr"));
     EXPECT_THROW(WriteMapPages(view_, a, "-", MapContent::Radiosity, {}), Error);
 }

@@ -3,16 +3,16 @@
 // and the image is the same for any thread count.
 #include "solve/render.h"
 
+#include "bake_fixture.h"
+#include "core/parallel.h"
+#include "io/exr_writer.h"
+#include "io/png_writer.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
 #include <numbers>
-
-#include "bake_fixture.h"
-#include "core/parallel.h"
-#include "io/exr_writer.h"
-#include "io/png_writer.h"
 
 namespace mebake::solve {
 namespace {
@@ -66,7 +66,8 @@ TEST_F(RenderTest, HeadOnQuadShowsRadianceAndBackground) {
             if (inside && std::abs(g.x - 1) > 0.01) {
                 const int c = g.x < 1 ? 0 : 1;
                 const Vec3f want = testing::ExpectedB(opt_, c, 0) / kPi;
-                for (int k = 0; k < 3; ++k) EXPECT_NEAR(v[k], want[k], 1e-5) << px << "," << py;
+                for (int k = 0; k < 3; ++k)
+                    EXPECT_NEAR(v[k], want[k], 1e-5) << px << "," << py;
                 ++on[c];
             } else if (outside) {
                 EXPECT_EQ(v, *ro_.background) << px << "," << py;

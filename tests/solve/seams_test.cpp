@@ -2,11 +2,11 @@
 // edge, the analytic jump for a discontinuous one, and the edge counts.
 #include "solve/seams.h"
 
+#include "bake_fixture.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
-
-#include "bake_fixture.h"
 
 namespace mebake::solve {
 namespace {
