@@ -1,0 +1,163 @@
+#include "solve/bake_view.h"
+
+#include "core/check.h"
+#include "core/error.h"
+#include "solve/shading.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace mebake::solve {
+
+BakeView OpenBakeView(const std::string& dir) {
+    BakeView v;
+    v.dir = dir;
+    v.manifest = stream::ReadManifest(dir);
+    if (v.manifest.state != "ingested")
+        UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", dir,
+                   v.manifest.state);
+    const std::string sol = SolutionPath(dir);
+    if (!std::filesystem::exists(sol))
+        UsageError("{}: not solved yet; run `mebake solve {}` first", dir, dir);
+    v.solution = ReadSolution(sol);
+    if (v.solution.fields.size() != v.manifest.charts.size())
+        CorruptError({sol}, "{} charts solved but the manifest lists {}", v.solution.fields.size(),
+                     v.manifest.charts.size());
+    for (const auto& f : v.solution.fields)
+        if (f.blocks() != (v.solution.radiosity ? 3 : 9))
+            CorruptError({sol}, "{} blocks per node for a {} solution", f.blocks(),
+                         v.solution.radiosity ? "radiosity" : "vector irradiance");
+    const std::string kept = dir + "/solve/scene.json";
+    v.scene = LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
+    return v;
+}
+
+std::vector<uint32_t> ChartResolutions(const BakeView& view) {
+    std::vector<uint32_t> res;
+    res.reserve(view.manifest.charts.size());
+    for (size_t c = 0; c < view.manifest.charts.size(); ++c) {
+        const uint32_t r = view.manifest.charts[c].resolution;
+        if (r == 0 || r > 65536 || (r & (r - 1)) != 0)
+            CorruptError({stream::ManifestPath(view.dir)},
+                         "chart {} has resolution {}; expected a power of two up to 65536", c, r);
+        res.push_back(r);
+    }
+    return res;
+}
+
+std::vector<uint32_t> AllCharts(const BakeView& view) {
+    std::vector<uint32_t> all(view.chart_count());
+    for (size_t c = 0; c < all.size(); ++c)
+        all[c] = uint32_t(c);
+    return all;
+}
+
+ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
+                         bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
+    : tile_(tile), field_(field), radiosity_(radiosity_unknown), scene_(scene) {
+    default_material_.use_vertex_colors = true;
+    for (size_t t = 0; t < tile.material.size(); ++t) {
+        const uint32_t packed = tile.material[t];
+        const uint32_t input = packed >> 16, local = packed & 0xFFFF;
+        if (input >= scene.per_input.size() || local >= scene.per_input[input].size())
+            CorruptError({tile_path},
+                         "triangle {} has material {}:{} which the scene does not have", t, input,
+                         local);
+    }
+    CHECK_EQ(tile.material.size(), tile.triangles.size());
+    vertex_triangle_.assign(tile.position.size(), stream::kNoTriangle);
+    for (size_t t = tile.triangles.size(); t-- > 0;)
+        for (uint32_t v : tile.triangles[t])
+            vertex_triangle_[v] = uint32_t(t);
+}
+
+Vec3f ChartShader::Color(uint32_t v) const {
+    return tile_.color.empty() ? Vec3f(-1, -1, -1) : tile_.color[v];
+}
+
+ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) const {
+    const auto& f = tile_.triangles[t];
+    const float b[3] = {b0, b1, b2};
+    ShadingPoint p;
+    Vec3d n{}, c{};
+    Vec2f uv{};
+    bool colored = !tile_.color.empty();
+    for (int k = 0; k < 3; ++k) {
+        uv += tile_.uv[f[k]] * b[k];
+        n += Vec3d(tile_.normal[f[k]]) * double(b[k]);
+        const Vec3f ck = Color(f[k]);
+        if (ck.x < 0)
+            colored = false;
+        c += Vec3d(ck) * double(b[k]);
+    }
+    n = Normalize(n);
+    if (!(Dot(n, n) > 0)) {
+        const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);
+        n = Normalize(Cross(p1 - p0, p2 - p0));
+        if (!(Dot(n, n) > 0))
+            n = Vec3d(0, 0, 1);
+    }
+    p.uv = uv;
+    p.normal = Vec3f(n);
+    p.material = &scene_.MaterialOf(tile_.material[t]);
+    const Vec3f color = colored ? Vec3f(c) : Vec3f(-1, -1, -1);
+    p.albedo = SurfaceAlbedo(*p.material, color);
+    return p;
+}
+
+ShadingPoint ChartShader::AtUv(Vec2f u) const {
+    u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
+    const stream::GridLocation loc = tile_.grid.Locate(u);
+    if (loc.triangle == stream::kNoTriangle) {  // a chart without triangles
+        ShadingPoint p;
+        p.uv = u;
+        p.normal = Vec3f(0, 0, 1);
+        p.material = &default_material_;
+        p.albedo = SurfaceAlbedo(default_material_, Vec3f(-1, -1, -1));
+        return p;
+    }
+    ShadingPoint p =
+        AtTriangle(loc.triangle, loc.barycentric[0], loc.barycentric[1], loc.barycentric[2]);
+    p.uv = u;
+    return p;
+}
+
+ShadingPoint ChartShader::AtVertex(uint32_t v) const {
+    ShadingPoint p;
+    p.uv = tile_.uv[v];
+    Vec3f n = Normalize(tile_.normal[v]);
+    p.normal = Dot(n, n) > 0 ? n : Vec3f(0, 0, 1);
+    const uint32_t t = vertex_triangle_[v];
+    p.material =
+        t == stream::kNoTriangle ? &default_material_ : &scene_.MaterialOf(tile_.material[t]);
+    p.albedo = SurfaceAlbedo(*p.material, Color(v));
+    return p;
+}
+
+Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
+    Vec3f b = ShadeRadiosity(field_, radiosity_, p.uv.x, p.uv.y, p.normal, p.albedo, *p.material);
+    for (int c = 0; c < 3; ++c) {
+        CHECK(std::isfinite(b[c]));
+        b[c] = std::max(0.f, b[c]);
+    }
+    return b;
+}
+
+Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
+    Vec3f l =
+        ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
+    for (int c = 0; c < 3; ++c) {
+        CHECK(std::isfinite(l[c]));
+        l[c] = std::max(0.f, l[c]);
+    }
+    return l;
+}
+
+void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
+    VectorIrradianceAt(field_, radiosity_, uv.x, uv.y, e);
+    for (int c = 0; c < 3; ++c)
+        CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
+}
+
+}  // namespace mebake::solve

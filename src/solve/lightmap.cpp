@@ -1,0 +1,242 @@
+#include "solve/lightmap.h"
+
+#include "core/check.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "io/png_writer.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+
+namespace mebake::solve {
+
+namespace {
+
+// Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
+constexpr float kPi = float(std::numbers::pi);
+
+std::string Extension(const std::string& path) {
+    std::string e = std::filesystem::path(path).extension().string();
+    for (char& c : e)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+}
+
+// The tiles and shaders of one shelf.
+struct ShelfCharts {
+    std::vector<stream::ChartTile> tiles;
+    std::vector<std::unique_ptr<ChartShader>> shaders;
+};
+
+ShelfCharts LoadShelf(const BakeView& view, const Atlas& atlas, const AtlasShelf& shelf) {
+    ShelfCharts s;
+    const size_t n = shelf.charts.size();
+    s.tiles.resize(n);
+    s.shaders.resize(n);
+    ParallelFor(0, int64_t(n), [&](int64_t k) {
+        const uint32_t c = shelf.charts[size_t(k)];
+        const std::string path = view.TilePath(c);
+        auto& tile = s.tiles[size_t(k)];
+        tile = stream::ReadTile(path, stream::TileParts::Mesh);
+        if (tile.meta.resolution != atlas.charts[c].resolution)
+            CorruptError({path}, "resolution {} but the manifest says {}", tile.meta.resolution,
+                         atlas.charts[c].resolution);
+        s.shaders[size_t(k)] = std::make_unique<ChartShader>(
+            tile, view.solution.fields[c], view.solution.radiosity, view.scene, path);
+    });
+    return s;
+}
+
+}  // namespace
+
+int MapChannels(MapContent content) {
+    return content == MapContent::Radiosity ? 4 : 9;
+}
+
+std::vector<std::string> MapChannelNames(MapContent content) {
+    if (content == MapContent::Radiosity)
+        return {"R", "G", "B", "A"};
+    std::vector<std::string> names;
+    for (const char* axis : {"x", "y", "z"})
+        for (const char* colour : {"R", "G", "B"})
+            names.push_back(std::string("E.") + axis + "." + colour);
+    return names;
+}
+
+void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
+                    MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
+                    size_t stride) {
+    const uint32_t g = atlas.gutter, res = atlas.charts[chart].resolution, block = res + 2 * g;
+    CHECK_LE(row_end, block);
+    const size_t nc = size_t(MapChannels(content));
+    for (uint32_t by = row_begin; by < row_end; ++by) {
+        float* row = out + size_t(by - row_begin) * stride;
+        // The square's texels, then the left and right gutters as copies of its border.
+        for (uint32_t bx = g; bx < g + res; ++bx) {
+            float* px = row + size_t(bx) * nc;
+            const Vec2f uv = atlas.TexelUv(chart, bx, by);
+            if (content == MapContent::Radiosity) {
+                const Vec3f b = shader.Radiosity(shader.AtUv(uv));
+                px[0] = b.x;
+                px[1] = b.y;
+                px[2] = b.z;
+                px[3] = 1;
+            } else {
+                Vec3f e[3];
+                shader.Irradiance(uv, e);
+                for (int axis = 0; axis < 3; ++axis)
+                    for (int c = 0; c < 3; ++c)
+                        px[axis * 3 + c] = e[c][axis];
+            }
+        }
+        for (uint32_t bx = 0; bx < g; ++bx) {
+            std::copy_n(row + size_t(g) * nc, nc, row + size_t(bx) * nc);
+            std::copy_n(row + size_t(g + res - 1) * nc, nc, row + size_t(g + res + bx) * nc);
+        }
+    }
+}
+
+void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
+                 const PageSink& sink, uint32_t band_rows) {
+    CHECK_LT(page, atlas.pages.size());
+    CHECK_GE(band_rows, 1u);
+    const AtlasPage& pg = atlas.pages[page];
+    const size_t nc = size_t(MapChannels(content)), stride = size_t(pg.width) * nc;
+    std::vector<float> band;
+    uint32_t y = 0;
+    auto emit_empty = [&](uint32_t until) {
+        while (y < until) {
+            const uint32_t rows = std::min(band_rows, until - y);
+            band.assign(size_t(rows) * stride, 0.f);
+            sink(band, y, rows);
+            y += rows;
+        }
+    };
+    for (const AtlasShelf& shelf : pg.shelves) {
+        emit_empty(shelf.y);
+        CHECK_EQ(y, shelf.y);
+        ShelfCharts charts = LoadShelf(view, atlas, shelf);
+        const size_t n = shelf.charts.size();
+        const uint32_t end = shelf.y + shelf.height;
+        while (y < end) {
+            const uint32_t rows = std::min(band_rows, end - y);
+            band.assign(size_t(rows) * stride, 0.f);
+            // One task per (chart, row): each writes its own texels only.
+            ParallelFor(0, int64_t(n) * rows, [&](int64_t task) {
+                const size_t k = size_t(task) / rows;
+                const uint32_t r = uint32_t(size_t(task) % rows);
+                const uint32_t c = shelf.charts[k];
+                const AtlasChart& ac = atlas.charts[c];
+                const uint32_t by = y + r - ac.y;
+                if (by >= atlas.block(c))
+                    return;  // a smaller block than the shelf's height
+                float* out = band.data() + size_t(r) * stride + size_t(ac.x) * nc;
+                FillChartBlock(*charts.shaders[k], atlas, c, content, by, by + 1, out, stride);
+            });
+            sink(band, y, rows);
+            y += rows;
+        }
+    }
+    emit_empty(pg.height);
+}
+
+std::string PagePath(const std::string& path, uint32_t page, uint32_t pages) {
+    if (pages <= 1)
+        return path;
+    std::filesystem::path p(path);
+    const std::string ext = p.extension().string();
+    p.replace_extension();
+    return p.string() + "." + std::to_string(1001 + page) + ext;
+}
+
+namespace {
+
+// Radiance B/pi of a Radiosity band, tone-mapped to 8-bit sRGB RGB.
+void ToneMapBand(std::span<const float> pixels, const ToneMap& tone, std::vector<uint8_t>& out) {
+    const size_t texels = pixels.size() / 4;
+    out.resize(texels * 3);
+    ParallelForRange(
+        0, int64_t(texels),
+        [&](int64_t lo, int64_t hi) {
+            for (int64_t t = lo; t < hi; ++t) {
+                const float* p = &pixels[size_t(t) * 4];
+                ToneMapPixel(Vec3f(p[0], p[1], p[2]) / kPi, tone, &out[size_t(t) * 3]);
+            }
+        },
+        4096);
+}
+
+void WritePngPage(const BakeView& view, const Atlas& atlas, uint32_t page, const ToneMap& tone,
+                  io::OutputStream& out) {
+    const AtlasPage& pg = atlas.pages[page];
+    io::PngWriter png(out, int(pg.width), int(pg.height), 3);
+    std::vector<uint8_t> bytes;
+    ComputePage(view, atlas, page, MapContent::Radiosity,
+                [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
+                    ToneMapBand(pixels, tone, bytes);
+                    png.WriteRows(bytes, int(rows));
+                });
+    png.Finish();
+}
+
+}  // namespace
+
+std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
+                                       const std::string& path, MapContent content,
+                                       const MapWriteOptions& options) {
+    const std::string ext = path == "-" ? ".exr" : Extension(path);
+    const bool png = ext == ".png";
+    if (!png && ext != ".exr")
+        UsageError("{}: expected a .exr{} file name", path,
+                   content == MapContent::Radiosity ? " or .png" : "");
+    if (png && content != MapContent::Radiosity)
+        UsageError("{}: vector irradiance maps are written as OpenEXR (.exr) only", path);
+    const uint32_t pages = uint32_t(atlas.pages.size());
+    if (path == "-" && pages > 1)
+        UsageError("the atlas has {} pages; give a file name instead of '-'", pages);
+    std::vector<std::string> written;
+    for (uint32_t p = 0; p < pages; ++p) {
+        const std::string file = PagePath(path, p, pages);
+        const AtlasPage& pg = atlas.pages[p];
+        if (png) {
+            auto out = io::OutputStream::Open(file);
+            WritePngPage(view, atlas, p, options.tone, *out);
+            out->Commit();
+        } else {
+            io::ExrOptions eo;
+            eo.type = options.exr_type;
+            eo.compression = options.compression;
+            eo.comments = content == MapContent::Radiosity
+                              ? "mebake light map: radiosity B (W/m^2, linear) in R G B; A = 1 on "
+                                "chart texels"
+                              : "mebake vector irradiance E (W/m^2, world axes): layers E.x E.y "
+                                "E.z, channels R G B";
+            eo.attributes = {
+                {"mebakeContent", content == MapContent::Radiosity ? "radiosity" : "irradiance"},
+                {"mebakePage", fmt::format("{} of {}", p + 1, pages)},
+                {"mebakeGutter", std::to_string(atlas.gutter)}};
+            io::ExrWriter w(file, int(pg.width), int(pg.height), MapChannelNames(content), eo);
+            ComputePage(view, atlas, p, content,
+                        [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
+                            w.WriteRows(pixels, int(rows));
+                        });
+            w.Commit();
+        }
+        written.push_back(file);
+    }
+    return written;
+}
+
+std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas, uint32_t page,
+                                       const ToneMap& tone) {
+    std::vector<uint8_t> bytes;
+    auto out = io::OutputStream::ToMemory(&bytes);
+    WritePngPage(view, atlas, page, tone, *out);
+    out->Commit();
+    return bytes;
+}
+
+}  // namespace mebake::solve

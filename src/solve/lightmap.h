@@ -1,0 +1,75 @@
+// Light maps and vector irradiance maps (seed paper 000, "Display": "we simply generate
+// light-maps, by computing in each parameter space B(x) = rho(x) (n_x . E(x))+"; for
+// glossy display "three textures store the three components (x, y, z) in R, G, B").
+//
+// Every texel of a chart's square is shaded at its centre with the tile's full-resolution
+// normal and albedo (bake_view.h ChartShader::AtUv); gutter texels repeat the nearest
+// border texel; texels outside every chart are 0. Pages are computed shelf by shelf and
+// handed out in bands of rows, so memory holds one band and one shelf's tiles, not a page.
+//
+// Contents:
+//   Radiosity   channels R, G, B = B in W/m^2 (linear, >= 0) and A = 1 on chart blocks
+//               (gutters included), 0 on unused texels.
+//   Irradiance  channels E.x.R, E.x.G, E.x.B, E.y.R, ..., E.z.B = the x, y, z world-space
+//               components of the vector irradiance E per colour (W/m^2, signed); all 0 for
+//               a radiosity solution.
+// A PNG light map holds the radiance B/pi tone-mapped (tonemap.h), the same mapping
+// `mebake render` uses, so a viewer showing it as emission matches the rendered views.
+#pragma once
+
+#include "io/exr_writer.h"
+#include "solve/atlas.h"
+#include "solve/bake_view.h"
+#include "solve/tonemap.h"
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace mebake::solve {
+
+enum class MapContent { Radiosity, Irradiance };
+
+int MapChannels(MapContent content);
+std::vector<std::string> MapChannelNames(MapContent content);
+
+// Receives rows [first_row, first_row + rows) of a page, pixel-major, MapChannels floats
+// per texel, top to bottom with no gaps.
+using PageSink =
+    std::function<void(std::span<const float> pixels, uint32_t first_row, uint32_t rows)>;
+
+// Computes one page and streams it to `sink` in bands of at most band_rows rows.
+void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
+                 const PageSink& sink, uint32_t band_rows = 64);
+
+// Fills block rows [row_begin, row_end) of one chart's block (gutters included): `out`
+// points at texel (0, row_begin) of the block, rows `stride` floats apart, MapChannels
+// floats per texel. Exposed for tests.
+void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
+                    MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
+                    size_t stride);
+
+// The file of page p: `path` itself for a one-page atlas, else UDIM-numbered
+// "name.<1001 + p>.ext" (page p = UDIM tile 1001 + p: u offset p % 10, v offset p / 10).
+std::string PagePath(const std::string& path, uint32_t page, uint32_t pages);
+
+struct MapWriteOptions {
+    io::ExrPixelType exr_type = io::ExrPixelType::Half;
+    io::ExrCompression compression = io::ExrCompression::Zip;
+    ToneMap tone;  // PNG only
+};
+
+// Writes every page to PagePath(path, ...), as OpenEXR (".exr") or, for Radiosity, 8-bit
+// sRGB PNG (".png"). Returns the paths written. Throws Error(Usage) for another extension,
+// or for "-" with more than one page.
+std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
+                                       const std::string& path, MapContent content,
+                                       const MapWriteOptions& options);
+
+// The tone-mapped light map of one page as an encoded PNG (for embedding in a .glb).
+std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas, uint32_t page,
+                                       const ToneMap& tone);
+
+}  // namespace mebake::solve

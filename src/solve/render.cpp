@@ -1,0 +1,182 @@
+#include "solve/render.h"
+
+#include "core/check.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "io/png_writer.h"
+#include "solve/visibility.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+
+namespace mebake::solve {
+
+namespace {
+
+// Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
+constexpr float kPi = float(std::numbers::pi);
+
+Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
+    switch (sky.type) {
+    case Sky::Type::Uniform:
+        return Vec3f(sky.radiance);
+    case Sky::Type::Overcast: {
+        // CIE overcast: L(theta) = Lz (1 + 2 cos theta) / 3 above the horizon.
+        const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
+        return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
+    }
+    case Sky::Type::None:
+        break;
+    }
+    return Vec3f{};
+}
+
+}  // namespace
+
+Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
+    Camera cam;
+    cam.width = width;
+    cam.height = height;
+    cam.fov = fov > 0 && fov < 180 ? fov : 50;
+    const Vec3d lo = view.manifest.bbox_min, hi = view.manifest.bbox_max;
+    const Vec3d center = (lo + hi) * 0.5;
+    const double radius = std::max(0.5 * Length(hi - lo), 1e-9);
+    const Vec3d up = Normalize(view.scene.sky.up);
+    Vec3d side = std::abs(up.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 0, 1);
+    const Vec3d front = Normalize(Cross(side, up));
+    side = Normalize(Cross(up, front));
+    const Vec3d dir = Normalize(front * 1.0 + side * 0.6 + up * 0.5);
+    const double half = cam.fov * 0.5 * std::numbers::pi / 180;
+    cam.eye = center + dir * (1.1 * radius / std::sin(half));
+    cam.target = center;
+    cam.up = up;
+    return cam;
+}
+
+RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
+    const Camera& cam = opt.camera;
+    if (cam.width < 1 || cam.height < 1 || cam.width > 16384 || cam.height > 16384)
+        UsageError("--size {}x{}: each side must be 1 to 16384 pixels", cam.width, cam.height);
+    if (!(cam.fov > 0 && cam.fov < 180))
+        UsageError("--fov {}: expected (0, 180) degrees", cam.fov);
+    if (opt.samples < 1 || opt.samples > 16)
+        UsageError("--samples {}: expected 1 to 16", opt.samples);
+    const Vec3d forward = Normalize(cam.target - cam.eye);
+    const Vec3d right = Normalize(Cross(forward, cam.up));
+    if (!(Dot(forward, forward) > 0) || !(Dot(right, right) > 0))
+        UsageError("camera: eye and target must differ and up must not be parallel to the view");
+    const Vec3d cam_up = Cross(right, forward);
+
+    // The full-resolution mesh: one Embree geometry per chart with triangles.
+    const size_t n = view.chart_count();
+    std::vector<stream::ChartTile> tiles(n);
+    std::vector<std::unique_ptr<ChartShader>> shaders(n);
+    ParallelFor(0, int64_t(n), [&](int64_t c) {
+        const std::string path = view.TilePath(uint32_t(c));
+        auto& tile = tiles[size_t(c)];
+        tile = stream::ReadTile(path, stream::TileParts::Mesh);
+        tile.grid = {};  // shading here needs triangles and barycentrics only
+        shaders[size_t(c)] = std::make_unique<ChartShader>(
+            tile, view.solution.fields[size_t(c)], view.solution.radiosity, view.scene, path);
+    });
+    VisibilityScene vis;
+    std::vector<uint32_t> geom_chart;
+    std::vector<float> xyz;
+    std::vector<uint32_t> idx;
+    for (size_t c = 0; c < n; ++c) {
+        const auto& tile = tiles[c];
+        if (tile.triangles.empty())
+            continue;
+        xyz.clear();
+        idx.clear();
+        for (const Vec3f& p : tile.position)
+            xyz.insert(xyz.end(), {p.x, p.y, p.z});
+        for (const auto& t : tile.triangles)
+            idx.insert(idx.end(), t.begin(), t.end());
+        const uint32_t id = vis.AddTriangles(xyz, idx, "chart");
+        CHECK_EQ(id, geom_chart.size());
+        geom_chart.push_back(uint32_t(c));
+    }
+    vis.Commit();
+
+    RenderedImage img;
+    img.width = cam.width;
+    img.height = cam.height;
+    img.rgb.assign(size_t(cam.width) * size_t(cam.height) * 3, 0.f);
+    const double tan_half = std::tan(cam.fov * 0.5 * std::numbers::pi / 180);
+    const double aspect = double(cam.width) / cam.height;
+    const int k = opt.samples;
+    const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
+    std::vector<uint64_t> row_hits(size_t(cam.height), 0);
+    ParallelFor(0, cam.height, [&](int64_t py) {
+        std::vector<Segment> segs(per_row);
+        std::vector<Hit> hits(per_row);
+        std::vector<Vec3f> dirs(per_row);
+        size_t r = 0;
+        for (int px = 0; px < cam.width; ++px)
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx, ++r) {
+                    const double x = (px + (sx + 0.5) / k) / cam.width * 2 - 1;
+                    const double y = 1 - (double(py) + (sy + 0.5) / k) / cam.height * 2;
+                    const Vec3d d =
+                        forward + right * (x * tan_half * aspect) + cam_up * (y * tan_half);
+                    dirs[r] = Vec3f(Normalize(d));
+                    segs[r] =
+                        Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
+                                dirs[r].x,        dirs[r].y,        dirs[r].z,        INFINITY};
+                }
+        vis.Intersect(segs, hits);
+        uint64_t count = 0;
+        const float weight = 1.f / float(k * k);
+        for (int px = 0; px < cam.width; ++px) {
+            Vec3f sum{};
+            for (int s = 0; s < k * k; ++s) {
+                const size_t i = size_t(px) * size_t(k * k) + size_t(s);
+                const Hit& h = hits[i];
+                if (h.geom_id == kNoHit) {
+                    sum += opt.background ? *opt.background : SkyRadiance(view.scene.sky, dirs[i]);
+                    continue;
+                }
+                ++count;
+                const ChartShader& sh = *shaders[geom_chart[h.geom_id]];
+                const ShadingPoint p = sh.AtTriangle(h.prim_id, 1 - h.u - h.v, h.u, h.v);
+                sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) / kPi;
+            }
+            float* out = &img.rgb[(size_t(py) * size_t(cam.width) + size_t(px)) * 3];
+            for (int c = 0; c < 3; ++c)
+                out[c] = sum[c] * weight;
+        }
+        row_hits[size_t(py)] = count;
+    });
+    img.rays = uint64_t(per_row) * uint64_t(cam.height);
+    for (uint64_t h : row_hits)
+        img.hits += h;
+    return img;
+}
+
+void WriteRenderedImage(const RenderedImage& image, const std::string& path, const ToneMap& tone,
+                        io::ExrPixelType exr_type) {
+    std::string ext = path == "-" ? ".exr" : std::filesystem::path(path).extension().string();
+    for (char& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext == ".exr") {
+        io::ExrOptions eo;
+        eo.type = exr_type;
+        eo.comments = "mebake render: linear radiance (W/m^2/sr) in R G B";
+        io::WriteExr(path, image.width, image.height, {"R", "G", "B"}, image.rgb, eo);
+        return;
+    }
+    if (ext != ".png")
+        UsageError("{}: expected a .exr or .png file name", path);
+    std::vector<uint8_t> bytes(image.rgb.size());
+    for (size_t p = 0; p < image.rgb.size() / 3; ++p)
+        ToneMapPixel(Vec3f(image.rgb[3 * p], image.rgb[3 * p + 1], image.rgb[3 * p + 2]), tone,
+                     &bytes[3 * p]);
+    io::WritePng(path, image.width, image.height, 3, bytes);
+}
+
+}  // namespace mebake::solve

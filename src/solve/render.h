@@ -1,0 +1,62 @@
+// `mebake render`: a view of the baked solution through a pinhole camera. Primary rays are
+// traced with Embree against the full-resolution mesh of the tiles (one geometry per
+// chart, so a hit's geometry id is the chart and its primitive id the tile triangle); the
+// hit is shaded with the hit barycentrics' uv, normal and colour (bake_view.h ChartShader):
+// radiance B/pi, or with `glossy` the seed paper's view-dependent approximation
+// L ~ Le + |E| fr(x, x + E, z). A back-face hit is shaded like the front (the solution
+// lives on the front side; scans are one-sided). Rays that miss see the background: the
+// given colour, else the scene's sky radiance (uniform, or CIE overcast by elevation).
+//
+// Deterministic: each pixel depends on its own rays only; rows run in parallel through
+// core/parallel.h. Memory: the whole mesh (positions in Embree, uv/normal/colour for
+// shading), like the visibility scene of a full-resolution solve.
+#pragma once
+
+#include "core/vec.h"
+#include "io/exr_writer.h"
+#include "solve/bake_view.h"
+#include "solve/tonemap.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mebake::solve {
+
+struct Camera {
+    Vec3d eye{0, 0, 1}, target{0, 0, 0}, up{0, 1, 0};
+    double fov = 50;  // vertical field of view, degrees, in (0, 180)
+    int width = 800, height = 600;
+};
+
+struct RenderOptions {
+    Camera camera;
+    bool glossy = false;
+    int samples = 1;                  // per pixel and axis: samples^2 stratified rays
+    std::optional<Vec3f> background;  // radiance of missed rays; default: the sky
+};
+
+struct RenderedImage {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  // linear radiance, row-major from the top row, 3 per pixel
+    uint64_t rays = 0, hits = 0;
+
+    Vec3f At(int x, int y) const {
+        const float* p = &rgb[(size_t(y) * size_t(width) + size_t(x)) * 3];
+        return Vec3f(p[0], p[1], p[2]);
+    }
+};
+
+// A camera that sees the whole bounding box from the front-right-above (quick looks).
+Camera DefaultCamera(const BakeView& view, int width, int height, double fov = 50);
+
+// Throws Error(Usage) for a degenerate camera (eye = target, up parallel to the view,
+// fov outside (0, 180), size outside [1, 16384]).
+RenderedImage Render(const BakeView& view, const RenderOptions& options);
+
+// To ".exr" (linear radiance, R G B) or ".png" (tone-mapped sRGB); "-" writes EXR.
+void WriteRenderedImage(const RenderedImage& image, const std::string& path, const ToneMap& tone,
+                        io::ExrPixelType exr_type = io::ExrPixelType::Half);
+
+}  // namespace mebake::solve

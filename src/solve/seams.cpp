@@ -1,0 +1,165 @@
+#include "solve/seams.h"
+
+#include "core/check.h"
+#include "core/error.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+
+namespace mebake::solve {
+
+namespace {
+
+constexpr int kMaxSamples = 16;
+
+float Luminance(const Vec3f& b) {
+    return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z;
+}
+
+struct EdgeSamples {
+    uint64_t g0 = 0, g1 = 0;             // g0 < g1
+    std::array<float, kMaxSamples> y{};  // luminance at the samples, from g0 to g1
+};
+
+struct KeyHash {
+    size_t operator()(const std::pair<uint64_t, uint64_t>& k) const {
+        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
+        h ^= h >> 31;
+        return size_t(h * 0xBF58476D1CE4E5B9ull);
+    }
+};
+
+struct Waiting {
+    uint32_t chart;
+    std::array<float, kMaxSamples> y;
+};
+
+// The outline edges of a tile (used by one triangle of it) with B sampled along them.
+std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
+                                       const stream::ChartTile& tile, int samples) {
+    struct E {
+        uint32_t a, b, tri;
+    };
+    std::vector<E> edges;
+    edges.reserve(tile.triangles.size() * 3);
+    for (uint32_t t = 0; t < tile.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t a = tile.triangles[t][size_t(k)], b = tile.triangles[t][size_t((k + 1) % 3)];
+            if (a > b)
+                std::swap(a, b);
+            edges.push_back({a, b, t});
+        }
+    std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) {
+        return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.tri < y.tri;
+    });
+    ChartShader shader(tile, view.solution.fields[c], view.solution.radiosity, view.scene,
+                       view.TilePath(c));
+    const uint64_t nv = view.manifest.vertex_count;
+    std::vector<EdgeSamples> out;
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i;
+        while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b)
+            ++j;
+        const E e = edges[i];
+        const bool outline = j - i == 1;
+        i = j;
+        if (!outline || e.a == e.b)
+            continue;
+        uint64_t ga = tile.vertex_id[e.a], gb = tile.vertex_id[e.b];
+        if (ga >= nv || gb >= nv || ga == gb)
+            continue;
+        uint32_t v0 = e.a, v1 = e.b;
+        if (ga > gb) {
+            std::swap(ga, gb);
+            std::swap(v0, v1);
+        }
+        const auto& tri = tile.triangles[e.tri];
+        const int i0 = int(std::find(tri.begin(), tri.end(), v0) - tri.begin());
+        const int i1 = int(std::find(tri.begin(), tri.end(), v1) - tri.begin());
+        CHECK(i0 < 3 && i1 < 3);
+        EdgeSamples s;
+        s.g0 = ga;
+        s.g1 = gb;
+        for (int k = 0; k < samples; ++k) {
+            const float t = (float(k) + 0.5f) / float(samples);
+            float b[3] = {0, 0, 0};
+            b[i0] = 1 - t;
+            b[i1] = t;
+            s.y[size_t(k)] =
+                Luminance(shader.Radiosity(shader.AtTriangle(e.tri, b[0], b[1], b[2])));
+        }
+        out.push_back(s);
+    }
+    return out;
+}
+
+}  // namespace
+
+SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
+    if (opt.samples < 1 || opt.samples > kMaxSamples)
+        UsageError("seam samples {}: expected 1 to {}", opt.samples, kMaxSamples);
+    const size_t ns = size_t(opt.samples);
+    std::unordered_map<std::pair<uint64_t, uint64_t>, Waiting, KeyHash> waiting;
+    struct Sample {
+        float diff, level;
+        uint32_t edge;
+    };
+    std::vector<Sample> samples;
+    std::vector<std::pair<uint64_t, uint64_t>> compared;
+    SeamStats st;
+    ForEachTile(
+        view, AllCharts(view), stream::TileParts::Mesh,
+        [&](uint32_t c, stream::ChartTile& tile) {
+            return SampleOutline(view, c, tile, opt.samples);
+        },
+        [&](uint32_t c, stream::ChartTile&, std::vector<EdgeSamples>& edges) {
+            for (const EdgeSamples& e : edges) {
+                const auto key = std::make_pair(e.g0, e.g1);
+                auto it = waiting.find(key);
+                if (it == waiting.end()) {
+                    waiting.emplace(key, Waiting{c, e.y});
+                    continue;
+                }
+                if (it->second.chart == c)
+                    continue;  // a split vertex inside one chart
+                const uint32_t edge = uint32_t(compared.size());
+                compared.push_back(key);
+                for (size_t k = 0; k < ns; ++k) {
+                    const float y1 = it->second.y[k], y2 = e.y[k];
+                    samples.push_back({std::abs(y1 - y2), 0.5f * (y1 + y2), edge});
+                }
+                waiting.erase(it);
+            }
+        });
+    st.seam_edges = compared.size();
+    st.open_edges = waiting.size();
+    st.samples = samples.size();
+    if (samples.empty())
+        return st;
+    double level = 0;
+    for (const Sample& s : samples)
+        level += s.level;
+    st.mean_level = level / double(samples.size());
+    const double floor = std::max(1e-3 * st.mean_level, 1e-30);
+    std::vector<double> rel(samples.size());
+    double sum = 0;
+    for (size_t i = 0; i < samples.size(); ++i) {
+        rel[i] = samples[i].diff / std::max(double(samples[i].level), floor);
+        sum += rel[i];
+        if (rel[i] > st.max_relative) {
+            st.max_relative = rel[i];
+            st.worst_v0 = compared[samples[i].edge].first;
+            st.worst_v1 = compared[samples[i].edge].second;
+        }
+    }
+    st.mean_relative = sum / double(samples.size());
+    const size_t q =
+        std::min(samples.size() - 1, size_t(std::ceil(0.95 * double(samples.size()))) - 1);
+    std::nth_element(rel.begin(), rel.begin() + ptrdiff_t(q), rel.end());
+    st.p95_relative = rel[q];
+    return st;
+}
+
+}  // namespace mebake::solve

@@ -1,0 +1,41 @@
+// The seam metric: how much the baked lighting jumps across chart borders, where the
+// light map is discontinuous by construction (each chart has its own square and field).
+// Collocation keeps the seed paper's solution "continuous across the chart boundaries";
+// this measures how well, at the display stage, as a viewer sees it.
+//
+// A seam edge is a mesh edge on the outline of two charts, recognized by the same pair of
+// global input vertex ids in both tiles. At `samples` points along it (t = (k + 1/2) / n
+// from the lower to the higher vertex id) B is evaluated on each side with that side's own
+// uv, normal, colour and material (ChartShader::AtTriangle), and the jump of luminance Y
+// (Rec. 709 weights) is compared with the local level:
+//   relative jump = |Y1 - Y2| / max((Y1 + Y2) / 2, 1e-3 x mean level over all samples).
+// An edge in more than two charts (non-manifold input) compares the first two; a third
+// copy counts as open. Edges with a vertex repair added (no input id) are skipped.
+//
+// Memory: the outline edges still waiting for their other side, and 8 bytes per sample.
+#pragma once
+
+#include "solve/bake_view.h"
+
+#include <cstdint>
+
+namespace mebake::solve {
+
+struct SeamOptions {
+    int samples = 3;  // points per edge, 1 to 16
+};
+
+struct SeamStats {
+    uint64_t seam_edges = 0;  // edge pairs compared
+    uint64_t open_edges = 0;  // outline edges with no other chart (mesh borders)
+    uint64_t samples = 0;
+    double mean_relative = 0;  // mean relative jump over all samples
+    double p95_relative = 0;   // 95th percentile
+    double max_relative = 0;
+    double mean_level = 0;                // mean luminance of B on seams (W/m^2)
+    uint64_t worst_v0 = 0, worst_v1 = 0;  // global vertex ids of the worst edge
+};
+
+SeamStats MeasureSeams(const BakeView& view, const SeamOptions& options = {});
+
+}  // namespace mebake::solve
