@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdlib.h>
 
 #include "app/commands.h"
+#include "app/export_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/units.h"
@@ -56,6 +58,69 @@ int RunSolve(const SolveCommand& c) {
     opt.stats_file = c.stats_file;
     solve::RunSolveJob(opt);
     spdlog::info("wrote {}/solve/solution.bin; peak memory {}", c.dir, FormatBytes(PeakRssBytes()));
+    return 0;
+}
+
+int RunBake(const BakeCommand& c) {
+    namespace fs = std::filesystem;
+    const bool to_stdout = c.output == "-";
+    std::string out_dir = c.output;
+    if (to_stdout) {
+        char tmpl[] = "/tmp/mebake-bake-XXXXXX";
+        if (!::mkdtemp(tmpl)) IoError({"/tmp"}, "cannot create a temporary directory");
+        out_dir = tmpl;
+    } else if (fs::exists(out_dir) && !fs::is_empty(out_dir) && !c.force) {
+        UsageError("{} exists and is not empty; pass --force to replace its outputs", out_dir);
+    }
+    fs::create_directories(out_dir);
+    const std::string dir = out_dir + "/scene.mebake";
+
+    IngestCommand ing;
+    ing.inputs = c.inputs;
+    ing.format = c.format;
+    ing.output = dir;
+    ing.memory = c.memory;
+    ing.threads = c.threads;
+    ing.lightmap_resolution = c.lightmap_resolution;
+    ing.force = true;
+    RunIngest(ing);
+
+    SolveCommand sol;
+    sol.dir = dir;
+    sol.scene_file = c.scene_file;
+    sol.order = c.order;
+    sol.threads = c.threads;
+    sol.memory = c.memory;
+    RunSolve(sol);
+
+    ExportCommand exp;
+    exp.dir = dir;
+    exp.threads = c.threads;
+    exp.force = true;
+    if (to_stdout) {
+        exp.vertex_colors = "-";
+        RunExport(exp);
+        fs::remove_all(out_dir);
+        return 0;
+    }
+    exp.lightmap = out_dir + "/lightmap.exr";
+    exp.mesh = out_dir + "/baked.glb";
+    exp.vertex_colors = out_dir + "/vertex_colors.ply";
+    exp.stats = out_dir + "/stats.json";
+    RunExport(exp);
+    ExportCommand png = exp;
+    png.lightmap = out_dir + "/lightmap.png";
+    png.mesh = png.vertex_colors = png.stats = png.irradiance = "";
+    RunExport(png);
+
+    RenderCommand ren;
+    ren.dir = dir;
+    ren.output = out_dir + "/render.png";
+    ren.threads = c.threads;
+    ren.force = true;
+    RunRender(ren);
+    spdlog::info("baked: {0}/lightmap.exr (and .png), {0}/baked.glb, {0}/vertex_colors.ply, "
+                 "{0}/render.png", out_dir);
     return 0;
 }
 

@@ -55,6 +55,20 @@ struct SolveCommand {
 };
 int RunSolve(const SolveCommand& opt);
 
+struct BakeCommand {
+    std::vector<std::string> inputs;
+    std::optional<io::MeshFormat> format;
+    std::string output;        // directory, or "-" for the vertex-coloured PLY on stdout
+    std::string scene_file;
+    std::string memory = "1G";
+    int threads = 0;
+    int order = -1;
+    uint32_t lightmap_resolution = 2048;
+    bool force = false;
+};
+// ingest + solve + export (+ a render) with defaults; see docs/usage in README.
+int RunBake(const BakeCommand& opt);
+
 // `mebake info <bake directory>`.
 int RunBakeInfo(const std::string& dir, bool json);
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/export_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "io/mesh_format.h"
@@ -118,6 +119,74 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"irradiance", "radiosity"}));
     sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
 
+    // export  (#include "app/export_commands.h")
+    mebake::app::ExportCommand exp;
+    auto* exp_cmd = app.add_subcommand(
+        "export", "Write what a solved bake directory holds: light-map atlas (EXR/PNG), vector\n"
+                  "irradiance maps (EXR), the mesh with light-map uvs (glTF .glb, PLY, OBJ),\n"
+                  "per-vertex baked colours (PLY) and statistics (JSON).");
+    exp_cmd->add_option("dir", exp.dir, "Solved bake directory")->required();
+    exp_cmd->add_option("--lightmap", exp.lightmap, "Light map: .exr (linear B, W/m^2) or .png (tone-mapped); pages of a multi-page atlas get UDIM numbers (name.1001.exr ...)");
+    exp_cmd->add_option("--irradiance", exp.irradiance, "Vector irradiance maps E (.exr, channels E.x.R ... E.z.B)");
+    exp_cmd->add_option("--mesh", exp.mesh, "Mesh with light-map uvs: .glb (light map embedded), .ply or .obj; '-' = PLY on stdout");
+    exp_cmd->add_option("--vertex-colors", exp.vertex_colors, "The input mesh with baked per-vertex colours (PLY, input vertex order); '-' = stdout");
+    exp_cmd->add_option("--stats", exp.stats, "Statistics (JSON: atlas, outputs, seam metric); '-' = stdout");
+    exp_cmd->add_option("--max-atlas", exp.max_atlas, "Largest atlas page side in texels (power of two)")->capture_default_str()
+        ->check(CLI::Range(16u, 65536u));
+    exp_cmd->add_option("--gutter", exp.gutter, "Texels of border repeated around each chart")->capture_default_str()
+        ->check(CLI::Range(0u, 64u));
+    exp_cmd->add_flag("--npot", exp.npot, "Atlas pages of any multiple of 4 texels (denser; default powers of two)");
+    exp_cmd->add_option("--exposure", exp.exposure, "Exposure in stops (EV) for tone-mapped outputs")->capture_default_str();
+    exp_cmd->add_option("--tonemap", exp.tonemap, "Tone curve for PNG and 8-bit colours")->capture_default_str()
+        ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
+    exp_cmd->add_flag("--float", exp.float_output, "EXR as 32-bit float (default half); vertex colours as linear float");
+    exp_cmd->add_option("--compression", exp.compression, "EXR compression")->capture_default_str()
+        ->check(CLI::IsMember({"zip", "piz", "none"}));
+    exp_cmd->add_flag("--unlit", exp.unlit, ".glb: KHR_materials_unlit base colour instead of an emissive light map");
+    exp_cmd->add_option("--threads", exp.threads, "Worker threads (0: all cores)")->capture_default_str();
+    exp_cmd->add_flag("-f,--force", exp.force, "Overwrite existing output files");
+
+    // render
+    mebake::app::RenderCommand ren;
+    auto* ren_cmd = app.add_subcommand(
+        "render", "Render a view of the baked lighting (pinhole camera, full-resolution mesh).");
+    ren_cmd->add_option("dir", ren.dir, "Solved bake directory")->required();
+    ren_cmd->add_option("-o,--output", ren.output, "Image: .exr (linear radiance) or .png (tone-mapped); '-' = EXR on stdout")->required();
+    ren_cmd->add_option("--eye", ren.eye, "Camera position x y z (default: a view of the whole scene)")->expected(3);
+    ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3);
+    ren_cmd->add_option("--up", ren.up, "Up direction x y z (default: the scene's up)")->expected(3);
+    ren_cmd->add_option("--fov", ren.fov, "Vertical field of view, degrees")->capture_default_str()
+        ->check(CLI::Range(1.0, 179.0));
+    ren_cmd->add_option("--size", ren.size, "Image size WIDTHxHEIGHT")->capture_default_str();
+    ren_cmd->add_flag("--glossy", ren.glossy, "View-dependent glossy display (seed: L ~ Le + |E| fr)");
+    ren_cmd->add_option("--samples", ren.samples, "Rays per pixel and axis (antialiasing)")->capture_default_str()
+        ->check(CLI::Range(1, 16));
+    ren_cmd->add_option("--background", ren.background, "Radiance of missed rays r g b (default: the sky)")->expected(3);
+    ren_cmd->add_option("--exposure", ren.exposure, "Exposure in stops (EV) for PNG")->capture_default_str();
+    ren_cmd->add_option("--tonemap", ren.tonemap, "Tone curve for PNG")->capture_default_str()
+        ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
+    ren_cmd->add_flag("--float", ren.float_output, "EXR as 32-bit float (default half)");
+    ren_cmd->add_option("--threads", ren.threads, "Worker threads (0: all cores)")->capture_default_str();
+    ren_cmd->add_flag("-f,--force", ren.force, "Overwrite an existing image");
+
+    // bake
+    mebake::app::BakeCommand bk;
+    std::string bk_format;
+    auto* bk_cmd = app.add_subcommand(
+        "bake", "Ingest, solve and export in one go: writes OUT/lightmap.exr and .png, "
+                "OUT/baked.glb,\nOUT/vertex_colors.ply, OUT/render.png and OUT/scene.mebake; "
+                "'-o -' streams the\nvertex-coloured PLY to stdout.");
+    bk_cmd->add_option("inputs", bk.inputs, "Mesh files, or '-' for stdin")->required();
+    bk_cmd->add_option("-o,--output", bk.output, "Output directory, or '-' for stdout")->required();
+    bk_cmd->add_option("--format", bk_format, "Format of stdin")->check(kFormatName);
+    bk_cmd->add_option("--scene", bk.scene_file, "Scene file (JSON); default: materials + default rig");
+    bk_cmd->add_option("--memory", bk.memory, "Memory budget")->capture_default_str();
+    bk_cmd->add_option("--threads", bk.threads, "Worker threads (0: all cores)")->capture_default_str();
+    bk_cmd->add_option("--order", bk.order, "Wavelet order 0..3 (default 2)")->check(CLI::Range(0, 3));
+    bk_cmd->add_option("--lightmap-resolution", bk.lightmap_resolution,
+                       "Atlas side the texel size aims at")->capture_default_str();
+    bk_cmd->add_flag("-f,--force", bk.force, "Replace outputs in an existing directory");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -136,6 +205,12 @@ int main(int argc, char** argv) {
             return mebake::app::RunIngest(ing);
         }
         if (*sol_cmd) return mebake::app::RunSolve(sol);
+        if (*bk_cmd) {
+            bk.format = ToFormat(bk_format);
+            return mebake::app::RunBake(bk);
+        }
+        if (*exp_cmd) return mebake::app::RunExport(exp);
+        if (*ren_cmd) return mebake::app::RunRender(ren);
         if (*conv_cmd) {
             conv.in_format = ToFormat(conv_in_format);
             conv.out_format = ToFormat(conv_out_format);
