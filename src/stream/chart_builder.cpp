@@ -193,7 +193,6 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         m.vertex_count = uint32_t(chart.position.size());
         m.triangle_count = uint32_t(chart.triangles.size());
         m.resolution = res;
-        m.geometry_resolution = tile.geometry.resolution;
         m.grid_resolution = uint32_t(grid_res);
         m.scale = param.scale;
         m.area = param.metrics.area_3d;

@@ -25,7 +25,9 @@ std::vector<T> ReadExact(const io::ChunkReader& r, uint32_t tag, size_t count) {
 
 void WriteTile(const std::string& path, const ChartTile& t) {
     io::ChunkWriter w(path, kKind, kTileVersion);
-    w.Add(Tag("META"), 0, {reinterpret_cast<const uint8_t*>(&t.meta), sizeof(ChartMeta)}, false);
+    ChartMeta meta = t.meta;
+    meta.geometry_resolution = t.geometry.resolution;  // derived from what is written
+    w.Add(Tag("META"), 0, {reinterpret_cast<const uint8_t*>(&meta), sizeof(ChartMeta)}, false);
     w.AddArray(Tag("VPOS"), 0, t.position);
     w.AddArray(Tag("VNRM"), 0, t.normal);
     w.AddArray(Tag("VUV "), 0, t.uv);
