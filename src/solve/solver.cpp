@@ -80,6 +80,40 @@ Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {
     return SurfaceAlbedo(scene_.MaterialOf(material), color);
 }
 
+// Receiver points at a node's ng x ng Gauss points, from the geometry pyramid two
+// levels below the node (or the finest), with their albedo.
+void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, const Vec3f& horizon,
+                         std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const {
+    pts->clear();
+    albedo->clear();
+    const int gl = std::min(sc.geometry.finest_level(), int(node.level) + 2);
+    for (int p = 0; p < ng * ng; ++p) {
+        double s, t, w;
+        GaussPoint2D(ng, p, &s, &t, &w);
+        auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
+        pts->push_back({smp.position, smp.normal, smp.vis_point, horizon});
+        albedo->push_back(Albedo(smp.material, smp.color));
+    }
+}
+
+// What the field stores at each point: E itself (9 blocks), or for a radiosity
+// solution B = rho (n . E)+ per colour (3 blocks).
+void Solver::ToFieldValues(const std::vector<ReceiverPoint>& pts, const std::vector<Vec3f>& albedo,
+                           const std::vector<float>& e9, bool radiosity, std::vector<float>* vals) {
+    vals->assign(pts.size() * (radiosity ? 3 : 9), 0.f);
+    for (size_t p = 0; p < pts.size(); ++p) {
+        if (!radiosity) {
+            std::copy(&e9[p * 9], &e9[p * 9] + 9, &(*vals)[p * 9]);
+            continue;
+        }
+        for (int c = 0; c < 3; ++c) {
+            const float* e = &e9[p * 9 + size_t(3 * c)];
+            float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
+            (*vals)[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
+        }
+    }
+}
+
 void Solver::RefineDirect(uint32_t chart) {
     const SolveChart& sc = charts_[chart];
     ChartField& field = fields_[chart];
@@ -115,18 +149,7 @@ void Solver::RefineDirect(uint32_t chart) {
         }
         e9.assign(pts.size() * 9, 0.f);
         if (direct.has_lights()) direct.Evaluate(pts, e9, DirectLight::kLights);
-        vals.assign(pts.size() * size_t(blocks), 0.f);
-        for (size_t p = 0; p < pts.size(); ++p) {
-            if (!radiosity) {
-                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
-                continue;
-            }
-            for (int c = 0; c < 3; ++c) {
-                const float* e = &e9[p * 9 + size_t(3 * c)];
-                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
-                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
-            }
-        }
+        ToFieldValues(pts, albedo, e9, radiosity, &vals);
     };
     auto max_abs = [](const std::vector<float>& v) {
         float m = 0;
@@ -189,31 +212,10 @@ void Solver::RefineDirect(uint32_t chart) {
     }
     for (size_t n : targets) {
         const QuadNode node = field.node(n);
-        pts.clear();
-        albedo.clear();
-        const int gl = std::min(finest, int(node.level) + 2);
-        const Vec3f horizon = NodeNormal(sc, node);
-        for (int p = 0; p < ng * ng; ++p) {
-            double s, t, w;
-            GaussPoint2D(ng, p, &s, &t, &w);
-            auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-            pts.push_back({smp.position, smp.normal, smp.vis_point, horizon});
-            albedo.push_back(Albedo(smp.material, smp.color));
-        }
+        GaussPoints(sc, node, ng, NodeNormal(sc, node), &pts, &albedo);
         e9.assign(pts.size() * 9, 0.f);
         direct.Evaluate(pts, e9, DirectLight::kSky);
-        vals.assign(pts.size() * size_t(blocks), 0.f);
-        for (size_t p = 0; p < pts.size(); ++p) {
-            if (!radiosity) {
-                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
-                continue;
-            }
-            for (int c = 0; c < 3; ++c) {
-                const float* e = &e9[p * 9 + size_t(3 * c)];
-                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
-                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
-            }
-        }
+        ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
         for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
@@ -341,16 +343,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     // receiver node's Gauss points; adds the projection to the node's pending set.
     auto evaluate_link = [&](size_t n, const Emitter& em, int l, uint32_t ri, uint32_t rj, int ls) {
         const QuadNode node = field.node(n);
-        pts.clear();
-        albedo.clear();
-        const int gl = std::min(finest, int(node.level) + 2);
-        for (int p = 0; p < ng * ng; ++p) {
-            double s, t, w;
-            GaussPoint2D(ng, p, &s, &t, &w);
-            auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-            pts.push_back({smp.position, smp.normal, smp.vis_point});
-            albedo.push_back(Albedo(smp.material, smp.color));
-        }
+        GaussPoints(sc, node, ng, Vec3f{}, &pts, &albedo);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - l), row = 1u << ls;
         const double texel_side = em.scale / double(row);
@@ -402,18 +395,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 for (int k = 0; k < 3; ++k)
                     e9[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
         }
-        vals.assign(pts.size() * size_t(blocks), 0.f);
-        for (size_t p = 0; p < pts.size(); ++p) {
-            if (!radiosity) {
-                std::copy(&e9[p * 9], &e9[p * 9] + 9, &vals[p * 9]);
-                continue;
-            }
-            for (int c = 0; c < 3; ++c) {
-                const float* e = &e9[p * 9 + size_t(3 * c)];
-                float irr = pts[p].normal.x * e[0] + pts[p].normal.y * e[1] + pts[p].normal.z * e[2];
-                vals[p * 3 + size_t(c)] = albedo[p][c] * std::max(0.f, irr);
-            }
-        }
+        ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
         for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "solve/direct.h"
 #include "solve/field.h"
 #include "solve/scene.h"
 #include "stream/geometry_image.h"
@@ -88,6 +89,11 @@ private:
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f NodeNormal(const SolveChart& sc, const QuadNode& node);
+    void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, const Vec3f& horizon,
+                     std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const;
+    static void ToFieldValues(const std::vector<ReceiverPoint>& pts,
+                              const std::vector<Vec3f>& albedo, const std::vector<float>& e9,
+                              bool radiosity, std::vector<float>* vals);
 
     const Scene& scene_;
     const std::vector<SolveChart>& charts_;
