@@ -61,10 +61,14 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const 
     }
 }
 
-Vec3f Solver::NodeNormal(const SolveChart& sc, const QuadNode& node) {
-    const int l = std::min(int(node.level), sc.geometry.finest_level());
-    const uint32_t shift = uint32_t(int(node.level) - l);
-    return sc.geometry.At(l, node.i >> shift, node.j >> shift).normal;
+Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
+    // A smooth, continuous normal field: the geometry pyramid at 8 x 8 per chart,
+    // interpolated. Continuity matters: where light grazes, a horizon that jumped from
+    // node to node showed as blocks.
+    constexpr int kHorizonLevel = 3;
+    return stream::SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()),
+                                  u, v)
+        .normal;
 }
 
 float Solver::RayOffset(uint32_t chart) const {
@@ -82,7 +86,7 @@ Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {
 
 // Receiver points at a node's ng x ng Gauss points, from the geometry pyramid two
 // levels below the node (or the finest), with their albedo.
-void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, const Vec3f& horizon,
+void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,
                          std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const {
     pts->clear();
     albedo->clear();
@@ -90,8 +94,10 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, con
     for (int p = 0; p < ng * ng; ++p) {
         double s, t, w;
         GaussPoint2D(ng, p, &s, &t, &w);
-        auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-        pts->push_back({smp.position, smp.normal, smp.vis_point, horizon});
+        const float u = float(node.U(s)), v = float(node.V(t));
+        auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+        pts->push_back({smp.position, smp.normal, smp.vis_point,
+                        horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
         albedo->push_back(Albedo(smp.material, smp.color));
     }
 }
@@ -132,7 +138,6 @@ void Solver::RefineDirect(uint32_t chart) {
         pts.clear();
         albedo.clear();
         const int gl = std::min(finest, int(node.level) + 2);
-        const Vec3f horizon = NodeNormal(sc, node);
         for (int c = 0; c < grid; ++c) {
             for (int a = 0; a < grid; ++a) {
                 double s, t, w;
@@ -142,8 +147,9 @@ void Solver::RefineDirect(uint32_t chart) {
                     s = ControlPoint(grid, a);
                     t = ControlPoint(grid, c);
                 }
-                auto smp = stream::SampleBilinear(sc.geometry, gl, float(node.U(s)), float(node.V(t)));
-                pts.push_back({smp.position, smp.normal, smp.vis_point, horizon});
+                const float u = float(node.U(s)), v = float(node.V(t));
+                auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+                pts.push_back({smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)});
                 albedo.push_back(Albedo(smp.material, smp.color));
             }
         }
@@ -212,7 +218,7 @@ void Solver::RefineDirect(uint32_t chart) {
     }
     for (size_t n : targets) {
         const QuadNode node = field.node(n);
-        GaussPoints(sc, node, ng, NodeNormal(sc, node), &pts, &albedo);
+        GaussPoints(sc, node, ng, true, &pts, &albedo);
         e9.assign(pts.size() * 9, 0.f);
         direct.Evaluate(pts, e9, DirectLight::kSky);
         ToFieldValues(pts, albedo, e9, radiosity, &vals);
@@ -343,7 +349,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     // receiver node's Gauss points; adds the projection to the node's pending set.
     auto evaluate_link = [&](size_t n, const Emitter& em, int l, uint32_t ri, uint32_t rj, int ls) {
         const QuadNode node = field.node(n);
-        GaussPoints(sc, node, ng, Vec3f{}, &pts, &albedo);
+        GaussPoints(sc, node, ng, false, &pts, &albedo);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - l), row = 1u << ls;
         const double texel_side = em.scale / double(row);

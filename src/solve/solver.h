@@ -88,8 +88,8 @@ private:
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
-    static Vec3f NodeNormal(const SolveChart& sc, const QuadNode& node);
-    void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, const Vec3f& horizon,
+    static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
+    void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,
                      std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const;
     static void ToFieldValues(const std::vector<ReceiverPoint>& pts,
                               const std::vector<Vec3f>& albedo, const std::vector<float>& e9,
