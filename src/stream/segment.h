@@ -61,6 +61,9 @@ std::vector<uint32_t> SplitChart(const TriMesh& chart, int parts);
 TriMesh ExtractChart(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri,
                      uint32_t chart);
 
+// All charts at once (chart c at index c), in O(F log F) rather than O(F) per chart.
+std::vector<TriMesh> ExtractCharts(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri);
+
 // Boundary loops, Euler characteristic, manifoldness; IsDisc() tells if m is a disc.
 TopologyReport CheckDisc(const TriMesh& m);
 

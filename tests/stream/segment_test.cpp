@@ -117,8 +117,10 @@ void ExpectValidCharts(const TriMesh& m, const std::vector<uint32_t>& ids,
             ++next;
     }
     size_t faces = 0;
+    const std::vector<TriMesh> all = ExtractCharts(m, ids);
+    ASSERT_EQ(all.size(), n);
     for (uint32_t c = 0; c < n; ++c) {
-        const TriMesh chart = ExtractChart(m, ids, c);
+        const TriMesh& chart = all[c];
         faces += chart.triangle_count();
         const TopologyReport t = CheckDisc(chart);
         EXPECT_TRUE(t.IsDisc()) << "chart " << c << ": faces " << t.faces << " loops "
@@ -155,6 +157,11 @@ TEST(ExtractChart, ReindexesLocallyAndKeepsGlobalIds) {
         ids[f] = 1;
     const TriMesh c = ExtractChart(m, ids, 1);
     ASSERT_EQ(c.triangle_count(), 9u);
+    const std::vector<TriMesh> all = ExtractCharts(m, ids);
+    ASSERT_EQ(all.size(), 2u);
+    EXPECT_EQ(all[1].triangles, c.triangles);
+    EXPECT_EQ(all[1].vertex_id, c.vertex_id);
+    EXPECT_EQ(all[0].triangle_count(), 9u);
     for (size_t v = 1; v < c.vertex_count(); ++v)
         EXPECT_LT(c.vertex_id[v - 1], c.vertex_id[v]);
     for (size_t f = 0; f < c.triangle_count(); ++f) {
