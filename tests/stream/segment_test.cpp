@@ -321,6 +321,36 @@ TEST(Segment, IsDeterministicAcrossThreadCounts) {
     ExpectValidCharts(m, one);
 }
 
+TEST(Segment, RepairedRandomSoupsGiveDiscs) {
+    uint64_t state = 777;
+    auto next = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    };
+    for (int trial = 0; trial < 150; ++trial) {
+        const uint32_t nv = 4 + next() % 60, nf = 1 + next() % 400;
+        std::vector<Vec3f> p;
+        for (uint32_t v = 0; v < nv; ++v)
+            p.push_back({float(next() % 9), float(next() % 9), float(next() % 4)});
+        std::vector<Tri> t;
+        for (uint32_t f = 0; f < nf; ++f)
+            t.push_back({next() % nv, next() % nv, next() % nv});
+        TriMesh m = Make(p, t);
+        Repair(m, {}, {});
+        SegmentOptions o;
+        o.min_chart_faces = 4;
+        o.target_chart_faces = 20;
+        const auto ids = SegmentCharts(m, o);
+        ExpectValidCharts(m, ids);
+        ASSERT_FALSE(::testing::Test::HasFailure()) << "trial " << trial;
+    }
+}
+
+TEST(Segment, EmptyMesh) {
+    EXPECT_TRUE(SegmentCharts(TriMesh{}, {}).empty());
+    EXPECT_TRUE(SplitChart(TriMesh{}, 2).empty());
+}
+
 // Real data ------------------------------------------------------------------------------
 
 // Test-only reader for the Stanford bunny's ASCII PLY files (x y z first on each vertex
