@@ -22,7 +22,7 @@ struct SegmentOptions {
     // this angle of the chart's mean normal; charts over it get another seed.
     double max_normal_deviation_deg = 60.0;
     // Weight of the distance term against the normal term (0 = pure VSA L2,1).
-    double compactness = 1.0;
+    double compactness = 0.5;
     int lloyd_iterations = 6;       // before the first check of the bounds
     int refinement_rounds = 12;     // seed insertions (each followed by 3 iterations)
     uint32_t min_chart_faces = 64;  // smaller charts are merged into a neighbour if possible
