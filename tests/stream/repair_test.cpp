@@ -195,6 +195,13 @@ TEST(Repair, SplitsBowTieVertex) {
     ExpectOrientedManifold(m);
     EXPECT_EQ(AnalyzeTopology(m).components, 2u);
     EXPECT_EQ(r.holes_filled, 0u);  // lone triangles are never closed into pillows
+
+    TriMesh lone = Make({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+    RepairOptions o;
+    o.max_hole_relative_diameter = 100;
+    const RepairReport rl = DoRepair(lone, o);
+    EXPECT_EQ(rl.holes_unfillable, 1u);
+    EXPECT_EQ(lone.triangle_count(), 1u);
 }
 
 TEST(Repair, SplitsTwoConesTouchingAtTheirApex) {
