@@ -5,15 +5,16 @@
 //              the member with the smallest global vertex_id represents its cluster.
 //  2 drop      triangles with an invalid index or non-finite vertex, a repeated index after
 //              welding, zero area, or the same vertex set as an earlier triangle.
-//  3 manifold  on flat arrays: pair the faces of every edge (an edge shared by more than two
-//              faces keeps at most pairs, preferring opposite directions), orient each
+//  3 manifold  on flat arrays: pair the faces of every edge (the faces of an edge shared by
+//              more than two are paired greedily, preferring opposite directions), orient each
 //              component by BFS over the pairs (an inconsistent pair is cut, which is how a
 //              Moebius band becomes orientable; the majority orientation wins), then give
 //              every fan of faces around a vertex its own vertex. A fan can still hold two
 //              faces on one edge that are not paired (a fold that wraps around both ends of
 //              the edge, common in badly decimated meshes): such a face gets its own copy of
-//              one end of the edge, and the pass repeats until nothing changes (each round
-//              adds vertices, at most one per corner, so it terminates).
+//              one end of the edge, and the pass repeats until nothing changes (a round that
+//              does not finish gives at least one corner a vertex of its own; there are 3F
+//              corners, so it terminates).
 //  4 OpenMesh  the result is loaded face by face into an OpenMesh half-edge mesh; a face it
 //              refuses is detached as a last resort (counted, never seen on test data), so
 //              the output is always an oriented 2-manifold with boundary.
@@ -560,6 +561,18 @@ RepairReport Repair(TriMesh& mesh, const std::vector<uint8_t>& vertex_on_cut,
                 !(box.Diagonal() <= options.max_hole_relative_diameter * comp_diag)) {
                 ++report.holes_too_large;
                 continue;
+            }
+            // The border of a lone triangle: filling it would glue a reversed copy on.
+            if (loop.size() == 3) {
+                const auto f0 = om.face_handle(om.opposite_halfedge_handle(h0));
+                const auto h1 = om.next_halfedge_handle(h0);
+                const auto f1 = om.face_handle(om.opposite_halfedge_handle(h1));
+                const auto f2 =
+                    om.face_handle(om.opposite_halfedge_handle(om.next_halfedge_handle(h1)));
+                if (f0 == f1 && f1 == f2) {
+                    ++report.holes_unfillable;
+                    continue;
+                }
             }
             loop_pos.clear();
             for (uint32_t v : loop)

@@ -6,23 +6,27 @@
 // (Cohen-Steiner, Alliez, Desbrun 2004): each chart has a proxy (unit normal N, centre C);
 // a face f joins the chart that minimises
 //     e(f, P) = |n_f - N|^2 + compactness * |c_f - C|^2 / R^2,
-// the L2,1 normal term plus a centroidal-Voronoi term (R^2 = mean chart area / pi), grown
-// from one seed face per proxy by a priority queue (cheapest face first). Proxies are refit
-// (area-weighted mean normal and centroid) and reseeded at their best face after each pass.
-// Curvature drives the segmentation through the normal term and through the bound on
-// normal deviation: where a chart's normals spread too far (a curved region), a seed is
-// inserted at its worst face, so curved parts get more, smaller charts. The size bound
-// inserts seeds the same way.
+// the L2,1 normal term plus a centroidal-Voronoi term (R^2 = mean chart area / pi) that
+// keeps charts compact, grown from one seed face per proxy by a priority queue (cheapest
+// face first). Proxies are refit (area-weighted mean normal and centroid) and reseeded at
+// their best face after each pass. Normals are lightly smoothed first (scan noise is not
+// curvature; the paper uses the Cohen-Steiner-Morvan estimator, which also integrates over
+// a neighbourhood). Curvature drives the segmentation through the normal term and through
+// the bound on normal deviation: where 5% or more of a chart's area deviates too far from
+// its proxy, a seed is inserted at its worst face, so curved parts get more, smaller
+// charts. The vertex bound inserts seeds the same way (at the farthest face).
 //
-// Discs by construction: a face is added to a growing chart only if it shares exactly one
-// edge with it and brings a new vertex, or shares two edges (filling a notch); anything
-// else would change the chart's Euler characteristic (a handle, a pinch or a closed
-// surface). Faces no seed could take start new charts. Small charts are merged into a
-// neighbour when they share one boundary arc (V - E = 1 on the common boundary keeps the
-// union a disc). Every final chart is checked with CheckDisc and split if it fails (never
-// seen) or exceeds the vertex bound.
+// Discs. Lloyd regions are edge-connected but may be annuli (around a bump), pinched at a
+// vertex, or a whole closed part. Every chart is checked (CheckDisc) and, if it is not a
+// disc or exceeds the vertex bound, split by SplitChart, whose growth is constrained: a
+// face joins a growing chart only if it shares exactly one edge with it and brings a new
+// vertex, or shares two edges (filling a notch); anything else would change the chart's
+// Euler characteristic (a handle, a pinch or a closed surface). Faces no seed can take
+// start charts of their own. Small charts are then merged into a neighbour when they share
+// exactly one boundary arc (V - E = 1 on the common boundary keeps the union a disc).
 //
-// Determinism: the queue orders by (cost, face, proxy), every loop runs in index order.
+// Determinism: the queue orders by (cost, face, proxy), every loop runs in index order
+// (faces are first put in Morton order of their centroids, for cache locality).
 #include "stream/segment.h"
 
 #include "core/check.h"
@@ -453,6 +457,11 @@ void MergeSmall(const Surface& s, uint32_t min_faces, uint32_t max_vertices, siz
     for (uint32_t a : order) {
         if (faces_of[a].empty() || faces_of[a].size() >= min_faces)
             continue;
+        bool degenerate = false;
+        for (uint32_t f : faces_of[a])
+            degenerate = degenerate || s.degenerate[f];
+        if (degenerate)
+            continue;  // a face with a repeated index is no part of any disc
         edges_with.clear();
         verts_with.clear();
         verts.clear();
@@ -576,6 +585,22 @@ constexpr int kSplitIterations = 4;
 
 TopologyReport CheckDisc(const TriMesh& m) {
     return AnalyzeTopology(m);
+}
+
+std::vector<TriMesh> ExtractCharts(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri) {
+    CHECK_EQ(chart_of_tri.size(), mesh.triangle_count());
+    std::vector<std::vector<uint32_t>> faces_of;
+    for (uint32_t f = 0; f < chart_of_tri.size(); ++f) {
+        const uint32_t c = chart_of_tri[f];
+        CHECK_LT(c, chart_of_tri.size());
+        if (c >= faces_of.size())
+            faces_of.resize(size_t(c) + 1);
+        faces_of[c].push_back(f);
+    }
+    std::vector<TriMesh> charts(faces_of.size());
+    ParallelFor(0, int64_t(faces_of.size()),
+                [&](int64_t c) { charts[size_t(c)] = ExtractFaces(mesh, faces_of[size_t(c)]); });
+    return charts;
 }
 
 TriMesh ExtractChart(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri,

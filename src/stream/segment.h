@@ -22,7 +22,7 @@ struct SegmentOptions {
     // this angle of the chart's mean normal; charts over it get another seed.
     double max_normal_deviation_deg = 60.0;
     // Weight of the distance term against the normal term (0 = pure VSA L2,1).
-    double compactness = 1.0;
+    double compactness = 0.5;
     int lloyd_iterations = 6;       // before the first check of the bounds
     int refinement_rounds = 12;     // seed insertions (each followed by 3 iterations)
     uint32_t min_chart_faces = 64;  // smaller charts are merged into a neighbour if possible
@@ -60,6 +60,9 @@ std::vector<uint32_t> SplitChart(const TriMesh& chart, int parts);
 // index in `mesh`, triangles in mesh order; global ids, albedo and materials carried over.
 TriMesh ExtractChart(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri,
                      uint32_t chart);
+
+// All charts at once (chart c at index c), in O(F log F) rather than O(F) per chart.
+std::vector<TriMesh> ExtractCharts(const TriMesh& mesh, const std::vector<uint32_t>& chart_of_tri);
 
 // Boundary loops, Euler characteristic, manifoldness; IsDisc() tells if m is a disc.
 TopologyReport CheckDisc(const TriMesh& m);

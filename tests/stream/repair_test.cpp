@@ -195,6 +195,13 @@ TEST(Repair, SplitsBowTieVertex) {
     ExpectOrientedManifold(m);
     EXPECT_EQ(AnalyzeTopology(m).components, 2u);
     EXPECT_EQ(r.holes_filled, 0u);  // lone triangles are never closed into pillows
+
+    TriMesh lone = Make({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+    RepairOptions o;
+    o.max_hole_relative_diameter = 100;
+    const RepairReport rl = DoRepair(lone, o);
+    EXPECT_EQ(rl.holes_unfillable, 1u);
+    EXPECT_EQ(lone.triangle_count(), 1u);
 }
 
 TEST(Repair, SplitsTwoConesTouchingAtTheirApex) {
@@ -473,6 +480,43 @@ TEST(Repair, IsDeterministic) {
     EXPECT_GT(ra.duplicate_triangles, 0u);
     ExpectOrientedManifold(a);
     EXPECT_EQ(AnalyzeTopology(a).euler, 2);
+}
+
+TEST(Repair, RandomSoupsBecomeOrientedManifolds) {
+    // Garbage in: few vertices, many random triangles, so edges carry many faces and
+    // vertices many fans, with random orientations, repeats and flat triangles.
+    uint64_t state = 12345;
+    auto next = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    };
+    for (int trial = 0; trial < 300; ++trial) {
+        const uint32_t nv = 4 + next() % 40, nf = 1 + next() % 300;
+        std::vector<Vec3f> p;
+        for (uint32_t v = 0; v < nv; ++v)
+            p.push_back({float(next() % 7), float(next() % 7), float(next() % 3)});
+        std::vector<Tri> t;
+        for (uint32_t f = 0; f < nf; ++f)
+            t.push_back({next() % nv, next() % nv, next() % nv});
+        TriMesh m = Make(p, t);
+        const RepairReport r = DoRepair(m);
+        ExpectOrientedManifold(m);
+        EXPECT_EQ(r.isolated_triangles, 0u) << "trial " << trial;
+        EXPECT_EQ(r.output_triangles, m.triangle_count());
+        EXPECT_EQ(AnalyzeTopology(m).boundary_loops, r.output_boundary_loops) << "trial " << trial;
+        for (size_t f = 0; f < m.triangle_count(); ++f) {
+            if (m.face_id[f] != kNoId) {
+                EXPECT_LT(m.face_id[f], 1000u + nf);
+            }
+        }
+    }
+}
+
+TEST(Repair, EmptyMesh) {
+    TriMesh m;
+    const RepairReport r = DoRepair(m);
+    EXPECT_EQ(r.output_triangles, 0u);
+    EXPECT_EQ(m.vertex_count(), 0u);
 }
 
 // Real data ------------------------------------------------------------------------------

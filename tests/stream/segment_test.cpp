@@ -117,8 +117,10 @@ void ExpectValidCharts(const TriMesh& m, const std::vector<uint32_t>& ids,
             ++next;
     }
     size_t faces = 0;
+    const std::vector<TriMesh> all = ExtractCharts(m, ids);
+    ASSERT_EQ(all.size(), n);
     for (uint32_t c = 0; c < n; ++c) {
-        const TriMesh chart = ExtractChart(m, ids, c);
+        const TriMesh& chart = all[c];
         faces += chart.triangle_count();
         const TopologyReport t = CheckDisc(chart);
         EXPECT_TRUE(t.IsDisc()) << "chart " << c << ": faces " << t.faces << " loops "
@@ -155,6 +157,11 @@ TEST(ExtractChart, ReindexesLocallyAndKeepsGlobalIds) {
         ids[f] = 1;
     const TriMesh c = ExtractChart(m, ids, 1);
     ASSERT_EQ(c.triangle_count(), 9u);
+    const std::vector<TriMesh> all = ExtractCharts(m, ids);
+    ASSERT_EQ(all.size(), 2u);
+    EXPECT_EQ(all[1].triangles, c.triangles);
+    EXPECT_EQ(all[1].vertex_id, c.vertex_id);
+    EXPECT_EQ(all[0].triangle_count(), 9u);
     for (size_t v = 1; v < c.vertex_count(); ++v)
         EXPECT_LT(c.vertex_id[v - 1], c.vertex_id[v]);
     for (size_t f = 0; f < c.triangle_count(); ++f) {
@@ -312,6 +319,36 @@ TEST(Segment, IsDeterministicAcrossThreadCounts) {
     EXPECT_EQ(one, two);
     EXPECT_EQ(two, again);
     ExpectValidCharts(m, one);
+}
+
+TEST(Segment, RepairedRandomSoupsGiveDiscs) {
+    uint64_t state = 777;
+    auto next = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    };
+    for (int trial = 0; trial < 150; ++trial) {
+        const uint32_t nv = 4 + next() % 60, nf = 1 + next() % 400;
+        std::vector<Vec3f> p;
+        for (uint32_t v = 0; v < nv; ++v)
+            p.push_back({float(next() % 9), float(next() % 9), float(next() % 4)});
+        std::vector<Tri> t;
+        for (uint32_t f = 0; f < nf; ++f)
+            t.push_back({next() % nv, next() % nv, next() % nv});
+        TriMesh m = Make(p, t);
+        Repair(m, {}, {});
+        SegmentOptions o;
+        o.min_chart_faces = 4;
+        o.target_chart_faces = 20;
+        const auto ids = SegmentCharts(m, o);
+        ExpectValidCharts(m, ids);
+        ASSERT_FALSE(::testing::Test::HasFailure()) << "trial " << trial;
+    }
+}
+
+TEST(Segment, EmptyMesh) {
+    EXPECT_TRUE(SegmentCharts(TriMesh{}, {}).empty());
+    EXPECT_TRUE(SplitChart(TriMesh{}, 2).empty());
 }
 
 // Real data ------------------------------------------------------------------------------
