@@ -139,6 +139,34 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     out.proxy_triangles.reserve(mesh.triangles.size() * 3);
     for (const auto& t : mesh.triangles) out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
 
+    // Normals over the whole repaired brick, so a vertex on a chart border has the same
+    // normal in every chart that holds it (per-chart normals made seams). Looked up by
+    // global vertex id; copies made by manifold splitting share an id and are averaged.
+    std::vector<std::pair<uint64_t, Vec3f>> brick_normals;
+    {
+        const std::vector<Vec3f> n = VertexNormals(mesh.position, mesh.triangles);
+        brick_normals.reserve(n.size());
+        for (size_t v = 0; v < n.size(); ++v) brick_normals.emplace_back(mesh.vertex_id[v], n[v]);
+        std::sort(brick_normals.begin(), brick_normals.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        size_t kept = 0;
+        for (size_t k = 0; k < brick_normals.size();) {
+            size_t e = k;
+            Vec3f sum{};
+            while (e < brick_normals.size() && brick_normals[e].first == brick_normals[k].first)
+                sum += brick_normals[e++].second;
+            brick_normals[kept++] = {brick_normals[k].first, Normalize(sum)};
+            k = e;
+        }
+        brick_normals.resize(kept);
+    }
+    auto normal_of = [&](uint64_t id, const Vec3f& fallback) {
+        auto it = std::lower_bound(brick_normals.begin(), brick_normals.end(), id,
+                                   [](const auto& a, uint64_t x) { return a.first < x; });
+        return it != brick_normals.end() && it->first == id && Length(it->second) > 0 ? it->second
+                                                                                       : fallback;
+    };
+
     SegmentOptions sopt;
     sopt.max_chart_vertices = opt.max_chart_vertices;
     std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, nullptr);
@@ -176,6 +204,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         ChartTile tile;
         tile.position = chart.position;
         tile.normal = VertexNormals(chart.position, chart.triangles);
+        for (size_t v = 0; v < tile.normal.size(); ++v)
+            tile.normal[v] = normal_of(chart.vertex_id[v], tile.normal[v]);
         tile.uv = param.uv;
         if (!chart.albedo.empty()) tile.color = chart.albedo;
         tile.vertex_id = chart.vertex_id;
