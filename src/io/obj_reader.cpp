@@ -21,6 +21,7 @@
 //  - Leading '#' lines become header.comments; '#' after a statement is a comment too.
 //    A line ending in '\' continues on the next line.
 #include "core/error.h"
+#include "io/batch_emitter.h"
 #include "io/mesh_format.h"
 #include "io/text_parse.h"
 
@@ -214,7 +215,7 @@ private:
         if (skipped_.size() >= kMaxSkippedKinds)
             return;
         skipped_.emplace_back(kw);
-        if (!begun_) {
+        if (!emit_.begun()) {
             header_.skipped.emplace_back(kw);
         } else {
             spdlog::debug("{}: skipped OBJ '{}' statements (not used)", lines_.Loc().ToString(),
@@ -352,37 +353,20 @@ private:
         }
     }
 
-    void Begin() {
-        if (begun_)
-            return;
-        begun_ = true;
-        sink_.Begin(header_);
-    }
-
+    void Begin() { emit_.Begin(header_); }
     void FlushVertices() {
         Begin();
-        if (verts_.size() == 0)
-            return;
-        verts_.first = vertices_sent_;
-        sink_.Vertices(verts_);
-        vertices_sent_ += verts_.size();
-        verts_.Clear();
+        emit_.FlushVertices(verts_);
     }
-
-    // Faces only name vertices read so far, so delivering those first keeps the
-    // promise that a sink has seen every vertex a face names.
+    // Faces only name vertices read so far: the emitter delivers those first.
     void FlushFaces() {
-        FlushVertices();
-        if (faces_.count() == 0)
-            return;
-        faces_.first = faces_sent_;
-        sink_.Faces(faces_);
-        faces_sent_ += faces_.count();
-        faces_.Clear();
+        Begin();
+        emit_.FlushFaces(verts_, faces_);
     }
 
     TextLineReader lines_;
     MeshSink& sink_;
+    BatchEmitter emit_{sink_};
     size_t batch_vertices_, batch_faces_, batch_corners_;
     MeshHeader header_;
     MeshSummary summary_;
@@ -392,11 +376,9 @@ private:
     std::string joined_;
     std::vector<std::string> skipped_;
     uint64_t vertex_count_ = 0, face_count_ = 0;
-    uint64_t vertices_sent_ = 0, faces_sent_ = 0;
     int64_t current_material_ = -1;
     size_t comment_bytes_ = 0;
     bool seen_statement_ = false;
-    bool begun_ = false;
     bool groups_full_warned_ = false;
 };
 

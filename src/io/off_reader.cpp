@@ -14,6 +14,7 @@
 //  - '#' starts a comment anywhere; comments before the counts go to header.comments.
 //  - 4OFF, nOFF and binary OFF are rejected as unsupported.
 #include "core/error.h"
+#include "io/batch_emitter.h"
 #include "io/mesh_format.h"
 #include "io/text_parse.h"
 
@@ -270,43 +271,28 @@ private:
                            colors_ ? " [r g b [a]]" : "", uvs_ ? " s t" : "");
     }
 
-    void Begin() {
-        if (begun_)
-            return;
-        begun_ = true;
-        sink_.Begin(header_);
-    }
+    void Begin() { emit_.Begin(header_); }
     void FlushVertices() {
         Begin();
-        if (verts_.size() == 0)
-            return;
-        verts_.first = vertices_sent_;
-        sink_.Vertices(verts_);
-        vertices_sent_ += verts_.size();
-        verts_.Clear();
+        emit_.FlushVertices(verts_);
     }
     void FlushFaces() {
-        FlushVertices();
-        if (faces_.count() == 0)
-            return;
-        faces_.first = faces_sent_;
-        sink_.Faces(faces_);
-        faces_sent_ += faces_.count();
-        faces_.Clear();
+        Begin();
+        emit_.FlushFaces(verts_, faces_);
     }
 
     TextLineReader lines_;
     MeshSink& sink_;
+    BatchEmitter emit_{sink_};
     size_t batch_vertices_, batch_faces_, batch_corners_;
     MeshHeader header_;
     MeshSummary summary_;
     VertexBatch verts_;
     FaceBatch faces_;
     uint64_t vertex_total_ = 0, face_total_ = 0;
-    uint64_t vertices_read_ = 0, vertices_sent_ = 0, faces_sent_ = 0;
+    uint64_t vertices_read_ = 0;
     size_t comment_bytes_ = 0;
     bool normals_ = false, colors_ = false, uvs_ = false;
-    bool begun_ = false;
 };
 
 }  // namespace

@@ -12,6 +12,7 @@
 // ASCII keywords are matched case-insensitively and may be split across lines; several
 // solids in one file are read one after another.
 #include "core/error.h"
+#include "io/batch_emitter.h"
 #include "io/mesh_format.h"
 #include "io/text_parse.h"
 
@@ -61,7 +62,7 @@ public:
           batch_vertices_(std::max<size_t>(opt.batch_vertices, 3)),
           batch_faces_(std::max<size_t>(opt.batch_faces, 1)) {}
 
-    void Begin(const MeshHeader& header) { sink_.Begin(header); }
+    void Begin(const MeshHeader& header) { emit_.Begin(header); }
 
     void Facet(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
         uint64_t v = vertex_count_;
@@ -91,30 +92,16 @@ public:
     uint64_t face_count() const { return face_count_; }
 
 private:
-    void FlushVertices() {
-        if (verts_.size() == 0)
-            return;
-        verts_.first = vertices_sent_;
-        sink_.Vertices(verts_);
-        vertices_sent_ += verts_.size();
-        verts_.Clear();
-    }
+    void FlushVertices() { emit_.FlushVertices(verts_); }
     // A facet's vertices always go out before the facet itself.
-    void FlushFaces() {
-        FlushVertices();
-        if (faces_.count() == 0)
-            return;
-        faces_.first = faces_sent_;
-        sink_.Faces(faces_);
-        faces_sent_ += faces_.count();
-        faces_.Clear();
-    }
+    void FlushFaces() { emit_.FlushFaces(verts_, faces_); }
 
     MeshSink& sink_;
+    BatchEmitter emit_{sink_};
     size_t batch_vertices_, batch_faces_;
     VertexBatch verts_;
     FaceBatch faces_;
-    uint64_t vertex_count_ = 0, face_count_ = 0, vertices_sent_ = 0, faces_sent_ = 0;
+    uint64_t vertex_count_ = 0, face_count_ = 0;
 };
 
 MeshHeader StlHeader(const InputStream& in, const char* encoding) {
