@@ -3,6 +3,7 @@
 // chunk, then the binary chunk = [PNGs][positions][normals][uvs][indices], each part
 // padded to 4 bytes. Primitives are accessor windows (byteOffset) into those views.
 #include "io/gltf_writer.h"
+#include "io/spill_file.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -28,86 +29,6 @@ constexpr uint32_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 constexpr uint32_t kLinear = 9729, kClampToEdge = 33071;
 // Index 2^32 - 1 is the primitive-restart value glTF forbids.
 constexpr uint64_t kMaxPrimitiveVertices = 0xFFFFFFFEull;
-
-// An anonymous temporary file (unlinked at once): buffered appends, then copied out.
-class Spill {
-public:
-    explicit Spill(const std::string& dir) {
-        std::string tmpl = dir + "/mebake-glb-XXXXXX";
-        std::vector<char> name(tmpl.begin(), tmpl.end());
-        name.push_back('\0');
-        fd_ = ::mkostemp(name.data(), O_CLOEXEC);
-        if (fd_ < 0)
-            IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
-        ::unlink(name.data());
-        dir_ = dir;
-        buffer_.reserve(kBuffer);
-    }
-    ~Spill() { ::close(fd_); }
-    Spill(const Spill&) = delete;
-    Spill& operator=(const Spill&) = delete;
-
-    void Append(const void* data, size_t n) {
-        const auto* p = static_cast<const uint8_t*>(data);
-        if (buffer_.size() + n > kBuffer)
-            Flush();
-        if (n >= kBuffer) {
-            WriteAll(p, n);
-        } else {
-            buffer_.insert(buffer_.end(), p, p + n);
-        }
-        size_ += n;
-    }
-    uint64_t size() const { return size_; }
-
-    void CopyTo(OutputStream& out) {
-        Flush();
-        std::vector<uint8_t> buf(kBuffer);
-        off_t at = 0;
-        for (;;) {
-            ssize_t k = ::pread(fd_, buf.data(), buf.size(), at);
-            if (k < 0 && errno == EINTR)
-                continue;
-            if (k < 0)
-                IoError({dir_}, "cannot read back a temporary file: {}", ErrnoString(errno));
-            if (k == 0)
-                break;
-            out.Write(buf.data(), size_t(k));
-            at += k;
-        }
-        if (uint64_t(at) != size_)
-            IoError({dir_}, "a temporary file is shorter than written");
-    }
-
-private:
-    static constexpr size_t kBuffer = size_t(1) << 20;
-    void Flush() {
-        WriteAll(buffer_.data(), buffer_.size());
-        buffer_.clear();
-    }
-    void WriteAll(const uint8_t* p, size_t n) {
-        while (n > 0) {
-            ssize_t k = ::write(fd_, p, n);
-            if (k < 0 && errno == EINTR)
-                continue;
-            if (k < 0)
-                IoError({dir_}, "cannot write a temporary file: {}", ErrnoString(errno));
-            p += k;
-            n -= size_t(k);
-        }
-    }
-    int fd_ = -1;
-    std::string dir_;
-    std::vector<uint8_t> buffer_;
-    uint64_t size_ = 0;
-};
-
-std::string TempDir(const GlbOptions& opt) {
-    if (!opt.temp_dir.empty())
-        return opt.temp_dir;
-    const char* t = std::getenv("TMPDIR");
-    return t && *t ? t : "/tmp";
-}
 
 uint64_t Pad4(uint64_t n) {
     return (n + 3) & ~uint64_t(3);
@@ -137,7 +58,7 @@ struct GlbWriter::Impl {
         std::vector<uint8_t> png;
     };
     GlbOptions options;
-    std::unique_ptr<Spill> positions, normals, uvs, indices;
+    std::unique_ptr<SpillFile> positions, normals, uvs, indices;
     std::vector<Material> materials;
     std::vector<Primitive> primitives;
     uint64_t vertices = 0, index_count = 0;
@@ -147,11 +68,11 @@ struct GlbWriter::Impl {
 
 GlbWriter::GlbWriter(const GlbOptions& options) : impl_(std::make_unique<Impl>()) {
     impl_->options = options;
-    const std::string dir = TempDir(options);
-    impl_->positions = std::make_unique<Spill>(dir);
-    impl_->normals = std::make_unique<Spill>(dir);
-    impl_->uvs = std::make_unique<Spill>(dir);
-    impl_->indices = std::make_unique<Spill>(dir);
+    const std::string& dir = options.temp_dir;
+    impl_->positions = std::make_unique<SpillFile>(dir, "glTF writer");
+    impl_->normals = std::make_unique<SpillFile>(dir, "glTF writer");
+    impl_->uvs = std::make_unique<SpillFile>(dir, "glTF writer");
+    impl_->indices = std::make_unique<SpillFile>(dir, "glTF writer");
 }
 
 GlbWriter::~GlbWriter() = default;
@@ -189,17 +110,17 @@ uint32_t GlbWriter::AddVertices(std::span<const Vec3f> position, std::span<const
         p.min = Min(p.min, q);
         p.max = Max(p.max, q);
     }
-    m.positions->Append(position.data(), position.size_bytes());
+    m.positions->Write(position.data(), position.size_bytes());
     m.scratch.clear();
     for (const Vec3f& n : normal) {
         Vec3d d = Normalize(Vec3d(n));
         Vec3f u = Dot(d, d) > 0 && std::isfinite(d.x + d.y + d.z) ? Vec3f(d) : Vec3f(0, 0, 1);
         m.scratch.insert(m.scratch.end(), {u.x, u.y, u.z});
     }
-    m.normals->Append(m.scratch.data(), m.scratch.size() * sizeof(float));
+    m.normals->Write(m.scratch.data(), m.scratch.size() * sizeof(float));
     for (const Vec2f& t : uv)
         CHECK(std::isfinite(t.x) && std::isfinite(t.y));
-    m.uvs->Append(uv.data(), uv.size_bytes());
+    m.uvs->Write(uv.data(), uv.size_bytes());
     p.vertices += position.size();
     m.vertices += position.size();
     return first;
@@ -215,7 +136,7 @@ void GlbWriter::AddTriangles(std::span<const std::array<uint32_t, 3>> triangles)
             CHECK_LT(uint64_t(v), p.vertices);
             m.index_scratch.push_back(v);
         }
-    m.indices->Append(m.index_scratch.data(), m.index_scratch.size() * sizeof(uint32_t));
+    m.indices->Write(m.index_scratch.data(), m.index_scratch.size() * sizeof(uint32_t));
     p.indices += m.index_scratch.size();
     m.index_count += m.index_scratch.size();
 }
@@ -345,7 +266,7 @@ void GlbWriter::Finish(OutputStream& out) {
             out.Write(mat.png.data(), mat.png.size());
             WritePadding(out, mat.png.size(), 0);
         }
-        for (Spill* s : {m.positions.get(), m.normals.get(), m.uvs.get(), m.indices.get()}) {
+        for (SpillFile* s : {m.positions.get(), m.normals.get(), m.uvs.get(), m.indices.get()}) {
             s->CopyTo(out);
             WritePadding(out, s->size(), 0);
         }

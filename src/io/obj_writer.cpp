@@ -15,6 +15,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "io/mesh_format.h"
+#include "io/spill_file.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -30,62 +31,6 @@ namespace {
 
 constexpr size_t kFlushBytes = size_t(1) << 20;
 
-// An anonymous temporary file (unlinked at once), written sequentially then copied out.
-class SpillFile {
-public:
-    explicit SpillFile(const std::string& temp_dir) {
-        std::string dir = temp_dir;
-        if (dir.empty()) {
-            const char* env = std::getenv("TMPDIR");
-            dir = env != nullptr && *env != '\0' ? env : "/tmp";
-        }
-        std::string tmpl = dir + "/mebake-obj-faces-XXXXXX";
-        std::vector<char> buf(tmpl.begin(), tmpl.end());
-        buf.push_back('\0');
-        fd_ = ::mkostemp(buf.data(), O_CLOEXEC);
-        if (fd_ < 0)
-            IoError({tmpl}, "cannot create a temporary file: {}", ErrnoString(errno));
-        path_ = buf.data();
-        ::unlink(path_.c_str());
-    }
-    ~SpillFile() { ::close(fd_); }
-    SpillFile(const SpillFile&) = delete;
-    SpillFile& operator=(const SpillFile&) = delete;
-
-    void Write(const char* data, size_t n) {
-        while (n > 0) {
-            ssize_t k = ::write(fd_, data, n);
-            if (k < 0) {
-                if (errno == EINTR)
-                    continue;
-                IoError({path_}, "write to a temporary file failed: {}", ErrnoString(errno));
-            }
-            data += k;
-            n -= size_t(k);
-        }
-    }
-
-    void CopyTo(OutputStream& out) {
-        if (::lseek(fd_, 0, SEEK_SET) != 0)
-            IoError({path_}, "cannot rewind a temporary file: {}", ErrnoString(errno));
-        std::vector<char> buf(kFlushBytes);
-        for (;;) {
-            ssize_t k = ::read(fd_, buf.data(), buf.size());
-            if (k < 0) {
-                if (errno == EINTR)
-                    continue;
-                IoError({path_}, "read from a temporary file failed: {}", ErrnoString(errno));
-            }
-            if (k == 0)
-                break;
-            out.Write(buf.data(), size_t(k));
-        }
-    }
-
-private:
-    int fd_ = -1;
-    std::string path_;
-};
 
 class ObjWriter final : public MeshSink {
 public:
@@ -144,7 +89,7 @@ public:
             max_index = std::max(max_index, i);
         if (!spill_ && !b.index.empty() && max_index >= vertices_) {
             FlushToOutput();
-            spill_ = std::make_unique<SpillFile>(opt_.temp_dir);
+            spill_ = std::make_unique<SpillFile>(opt_.temp_dir, "OBJ writer");
         }
         if (spill_)
             max_spilled_ = std::max(max_spilled_, b.index.empty() ? 0 : max_index);

@@ -18,6 +18,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "io/mesh_format.h"
+#include "io/spill_file.h"
 
 #include <algorithm>
 #include <bit>
@@ -27,103 +28,12 @@
 #include <fcntl.h>
 #include <fmt/compile.h>
 #include <iterator>
+#include <memory>
 #include <unistd.h>
 
 namespace mebake::io {
 namespace {
 
-// An anonymous temporary file: written once, then read back from the start.
-class SpillFile {
-public:
-    SpillFile() = default;
-    SpillFile(const SpillFile&) = delete;
-    SpillFile& operator=(const SpillFile&) = delete;
-    ~SpillFile() {
-        if (fd_ >= 0)
-            ::close(fd_);
-    }
-
-    bool is_open() const { return fd_ >= 0; }
-    uint64_t size() const { return size_; }
-
-    void Open(const std::string& dir) {
-        dir_ = dir;
-        std::string tmpl = dir + "/mebake-ply-spill-XXXXXX";
-        std::vector<char> name(tmpl.begin(), tmpl.end());
-        name.push_back('\0');
-        fd_ = ::mkostemp(name.data(), O_CLOEXEC);
-        if (fd_ < 0)
-            IoError({dir}, "cannot create a temporary spill file for the PLY writer: {}",
-                    ErrnoString(errno));
-        ::unlink(name.data());
-        buffer_.reserve(kBufferSize);
-    }
-
-    void Write(const void* data, size_t n) {
-        const auto* p = static_cast<const uint8_t*>(data);
-        size_ += n;
-        if (buffer_.size() + n > kBufferSize)
-            Flush();
-        if (n >= kBufferSize) {
-            WriteAll(p, n);
-            return;
-        }
-        buffer_.insert(buffer_.end(), p, p + n);
-    }
-
-    // Appends the whole content to `out`.
-    void CopyTo(OutputStream& out) {
-        Flush();
-        if (::lseek(fd_, 0, SEEK_SET) != 0)
-            IoError({dir_}, "cannot rewind a PLY spill file: {}", ErrnoString(errno));
-        buffer_.resize(kBufferSize);
-        uint64_t left = size_;
-        while (left > 0) {
-            ssize_t n = ::read(fd_, buffer_.data(), size_t(std::min<uint64_t>(left, kBufferSize)));
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n <= 0)
-                IoError({dir_}, "cannot read back a PLY spill file: {}",
-                        n < 0 ? ErrnoString(errno) : std::string("it is shorter than written"));
-            out.Write(buffer_.data(), size_t(n));
-            left -= uint64_t(n);
-        }
-        buffer_.clear();
-    }
-
-private:
-    static constexpr size_t kBufferSize = size_t(1) << 20;
-
-    void Flush() {
-        WriteAll(buffer_.data(), buffer_.size());
-        buffer_.clear();
-    }
-    void WriteAll(const uint8_t* p, size_t n) {
-        while (n > 0) {
-            ssize_t k = ::write(fd_, p, n);
-            if (k < 0 && errno == EINTR)
-                continue;
-            if (k < 0)
-                IoError({dir_}, "cannot write a PLY spill file: {}", ErrnoString(errno));
-            p += k;
-            n -= size_t(k);
-        }
-    }
-
-    int fd_ = -1;
-    std::string dir_;
-    std::vector<uint8_t> buffer_;
-    uint64_t size_ = 0;
-};
-
-std::string TempDir(const WriteOptions& opt) {
-    if (!opt.temp_dir.empty())
-        return opt.temp_dir;
-    const char* t = std::getenv("TMPDIR");
-    if (t && *t)
-        return t;
-    return "/tmp";
-}
 
 // A header text line: line breaks in the source would end it early.
 std::string OneLine(const std::string& s) {
@@ -163,7 +73,7 @@ public:
             header_faces_ = h.face_count;
             WriteHeader(header_vertices_, header_faces_);
         } else {
-            vertex_spill_.Open(TempDir(opt_));
+            vertex_spill_ = std::make_unique<SpillFile>(opt_.temp_dir, "PLY writer");
         }
     }
 
@@ -186,16 +96,16 @@ public:
         if (direct_) {
             out_.Write(scratch_.data(), scratch_.size());
         } else {
-            vertex_spill_.Write(scratch_.data(), scratch_.size());
+            vertex_spill_->Write(scratch_.data(), scratch_.size());
         }
         vertices_ += n;
     }
 
     void Faces(const FaceBatch& b) override {
         // In direct mode a face must wait for the last vertex record to be written.
-        const bool spill = !direct_ || face_spill_.is_open() || vertices_ < header_vertices_;
-        if (spill && !face_spill_.is_open())
-            face_spill_.Open(TempDir(opt_));
+        const bool spill = !direct_ || face_spill_ != nullptr || vertices_ < header_vertices_;
+        if (spill && face_spill_ == nullptr)
+            face_spill_ = std::make_unique<SpillFile>(opt_.temp_dir, "PLY writer");
         if (direct_ && faces_ + b.count() > header_faces_)
             InputError({out_.name()},
                        "the mesh delivers more faces than the {} its header declared",
@@ -246,7 +156,7 @@ public:
             at += n;
         }
         if (spill) {
-            face_spill_.Write(scratch_.data(), scratch_.size());
+            face_spill_->Write(scratch_.data(), scratch_.size());
         } else {
             out_.Write(scratch_.data(), scratch_.size());
         }
@@ -263,13 +173,13 @@ public:
                            vertices_, header_vertices_);
         } else {
             WriteHeader(vertices_, faces_);
-            vertex_spill_.CopyTo(out_);
+            if (vertex_spill_) vertex_spill_->CopyTo(out_);
         }
         if (any_index_ && max_index_ >= vertices_)
             InputError({out_.name()}, "a face names vertex {} but the mesh has only {} vertices",
                        max_index_, vertices_);
-        if (face_spill_.is_open())
-            face_spill_.CopyTo(out_);
+        if (face_spill_ != nullptr)
+            face_spill_->CopyTo(out_);
         if (direct_ && faces_ != header_faces_)
             InputError({out_.name()},
                        "the mesh delivered {} faces but its header declared {}; the PLY written "
@@ -412,7 +322,7 @@ private:
     uint64_t vertices_ = 0, faces_ = 0;
     uint64_t max_index_ = 0;
     bool any_index_ = false;
-    SpillFile vertex_spill_, face_spill_;
+    std::unique_ptr<SpillFile> vertex_spill_, face_spill_;
     fmt::memory_buffer scratch_;
 };
 
