@@ -175,14 +175,17 @@ int RunExport(const ExportCommand& c) {
         seconds["seams"] = Since(t);
         j["seams"] = {{"edges", s.seam_edges},
                       {"open_edges", s.open_edges},
+                      {"fold_edges", s.fold_edges},
                       {"samples", s.samples},
                       {"mean_relative_jump", s.mean_relative},
                       {"p95_relative_jump", s.p95_relative},
                       {"max_relative_jump", s.max_relative},
                       {"mean_level", s.mean_level},
                       {"worst_edge", {s.worst_v0, s.worst_v1}}};
-        spdlog::info("seams: {} edges, relative jump mean {:.3g}, p95 {:.3g}, max {:.3g}",
-                     s.seam_edges, s.mean_relative, s.p95_relative, s.max_relative);
+        spdlog::info(
+            "seams: {} edges ({} on folds not measured), relative jump mean {:.3g}, p95 {:.3g}, "
+            "max {:.3g}",
+            s.seam_edges, s.fold_edges, s.mean_relative, s.p95_relative, s.max_relative);
     }
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;

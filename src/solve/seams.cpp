@@ -13,6 +13,7 @@ namespace mebake::solve {
 namespace {
 
 constexpr int kMaxSamples = 16;
+constexpr float kFoldCos = 0.7071f;  // 45 degrees
 
 float Luminance(const Vec3f& b) {
     return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z;
@@ -21,6 +22,7 @@ float Luminance(const Vec3f& b) {
 struct EdgeSamples {
     uint64_t g0 = 0, g1 = 0;             // g0 < g1
     std::array<float, kMaxSamples> y{};  // luminance at the samples, from g0 to g1
+    Vec3f normal{};                      // the face beside the edge (unit)
 };
 
 struct KeyHash {
@@ -34,6 +36,7 @@ struct KeyHash {
 struct Waiting {
     uint32_t chart;
     std::array<float, kMaxSamples> y;
+    Vec3f normal;
 };
 
 // The outline edges of a tile (used by one triangle of it) with B sampled along them.
@@ -82,6 +85,8 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
         EdgeSamples s;
         s.g0 = ga;
         s.g1 = gb;
+        s.normal = Normalize(Cross(tile.position[tri[1]] - tile.position[tri[0]],
+                                   tile.position[tri[2]] - tile.position[tri[0]]));
         for (int k = 0; k < samples; ++k) {
             const float t = (float(k) + 0.5f) / float(samples);
             float b[3] = {0, 0, 0};
@@ -119,11 +124,16 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
                 const auto key = std::make_pair(e.g0, e.g1);
                 auto it = waiting.find(key);
                 if (it == waiting.end()) {
-                    waiting.emplace(key, Waiting{c, e.y});
+                    waiting.emplace(key, Waiting{c, e.y, e.normal});
                     continue;
                 }
                 if (it->second.chart == c)
                     continue;  // a split vertex inside one chart
+                if (Dot(it->second.normal, e.normal) < kFoldCos) {
+                    ++st.fold_edges;  // B jumps here on the surface itself
+                    waiting.erase(it);
+                    continue;
+                }
                 const uint32_t edge = uint32_t(compared.size());
                 compared.push_back(key);
                 for (size_t k = 0; k < ns; ++k) {

@@ -9,6 +9,8 @@
 // uv, normal, colour and material (ChartShader::AtTriangle), and the jump of luminance Y
 // (Rec. 709 weights) is compared with the local level:
 //   relative jump = |Y1 - Y2| / max((Y1 + Y2) / 2, 1e-3 x mean level over all samples).
+// Edges where the surface itself folds (faces more than 45 degrees apart, a box's edge)
+// are counted but not measured: B is discontinuous there in any correct solution.
 // An edge in more than two charts (non-manifold input) compares the first two; a third
 // copy counts as open. Edges with a vertex repair added (no input id) are skipped.
 //
@@ -28,6 +30,7 @@ struct SeamOptions {
 struct SeamStats {
     uint64_t seam_edges = 0;  // edge pairs compared
     uint64_t open_edges = 0;  // outline edges with no other chart (mesh borders)
+    uint64_t fold_edges = 0;  // chart borders on a fold of the surface (not measured)
     uint64_t samples = 0;
     double mean_relative = 0;  // mean relative jump over all samples
     double p95_relative = 0;   // 95th percentile

@@ -48,6 +48,11 @@ constexpr int kSmoothingPasses = 3;
 // The share of a chart's area whose normal must lie within the deviation bound: the rest
 // is left to noise and small bumps.
 constexpr double kDeviationQuantile = 0.95;
+// Charts never grow across an edge whose faces fold by more than this (a box's or a
+// wall's edge): E jumps there, and one polynomial over both sides would ring. Scans rarely
+// fold this sharply between neighbouring faces; the few noise spikes that do make charts
+// under min_chart_faces, which are merged back.
+constexpr double kCreaseDeg = 70;
 
 struct Surface {
     const std::vector<Tri>& tris;
@@ -58,6 +63,7 @@ struct Surface {
     std::vector<uint32_t> twin;
     VertexFaces vf;
     std::vector<uint8_t> degenerate;  // repeated index: a chart of its own
+    std::vector<uint8_t> crease;      // per half-edge: the two faces fold by > kCreaseDeg
     double total_area = 0;
     // Normal and centroid in one cache line's reach for the partition's hot loop.
     struct Packed {
@@ -91,6 +97,11 @@ struct Surface {
             total_area += a;
         twin = BuildTwins(tris, BuildEdgeGroups(tris));
         vf = BuildVertexFaces(tris, vertex_count);
+        // Folds are read off the raw normals, before smoothing blurs a box's edges away.
+        crease.assign(3 * nf, 0);
+        const double crease_cos = std::cos(kCreaseDeg * kPi / 180);
+        for (size_t h = 0; h < 3 * nf; ++h)
+            crease[h] = twin[h] != kNoIndex && Dot(normal[h / 3], normal[twin[h] / 3]) < crease_cos;
         SmoothNormals();
         packed.resize(nf);
         for (size_t f = 0; f < nf; ++f)
@@ -220,7 +231,7 @@ private:
                         const std::vector<uint32_t>& chart) {
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t g = s_.Neighbour(f, k);
-            if (g != kNoIndex && chart[g] == kNoIndex && !s_.degenerate[g])
+            if (g != kNoIndex && chart[g] == kNoIndex && !s_.degenerate[g] && !s_.crease[3 * f + k])
                 heap_.push({Cost(g, proxy), g, p});
         }
     }
@@ -753,9 +764,12 @@ std::vector<uint32_t> SegmentOrdered(const TriMesh& mesh, const SegmentOptions& 
         report.initial_seeds = proxies.size();
     }
 
+    // Small-chart merging guards scans against noise-sized charts; on a coarse mesh (a
+    // Cornell box: a few faces per object) every chart is "small", and merging would fold
+    // faces meeting at 90 degrees into one chart, so the bound shrinks with the brick.
+    const uint32_t min_faces = std::min(options.min_chart_faces, std::max(1u, nf / 256));
     std::vector<uint32_t> chart;
-    Lloyd(s, seg, options.lloyd_iterations, options.min_chart_faces, /*discs=*/false, proxies,
-          chart, report);
+    Lloyd(s, seg, options.lloyd_iterations, min_faces, /*discs=*/false, proxies, chart, report);
     const double max_dev = options.max_normal_deviation_deg;
     for (int round = 0; round < options.refinement_rounds; ++round) {
         const ChartStats st = Stats(s, proxies, chart);
@@ -765,7 +779,7 @@ std::vector<uint32_t> SegmentOrdered(const TriMesh& mesh, const SegmentOptions& 
             uint32_t f = kNoIndex;
             if (st.vertices[c] > options.max_chart_vertices)
                 f = st.farthest[c];
-            else if (st.deviation_deg[c] > max_dev && st.faces[c] >= 2 * options.min_chart_faces)
+            else if (st.deviation_deg[c] > max_dev && st.faces[c] >= 2 * min_faces)
                 f = st.worst_normal[c];
             if (f == kNoIndex || f == proxies[c].seed)
                 continue;
@@ -775,8 +789,7 @@ std::vector<uint32_t> SegmentOrdered(const TriMesh& mesh, const SegmentOptions& 
         if (inserted == 0)
             break;
         report.inserted_seeds += inserted;
-        Lloyd(s, seg, kRefineIterations, options.min_chart_faces, /*discs=*/false, proxies, chart,
-              report);
+        Lloyd(s, seg, kRefineIterations, min_faces, /*discs=*/false, proxies, chart, report);
     }
     report.leftover_charts = seg.leftovers();
     size_t chart_count = Renumber(chart);
@@ -828,8 +841,7 @@ std::vector<uint32_t> SegmentOrdered(const TriMesh& mesh, const SegmentOptions& 
         work = std::move(next);
     }
     chart_count = Renumber(chart);
-    MergeSmall(s, options.min_chart_faces, options.max_chart_vertices, chart_count, chart,
-               &report.merged_charts);
+    MergeSmall(s, min_faces, options.max_chart_vertices, chart_count, chart, &report.merged_charts);
     chart_count = Renumber(chart);
 
     // Report.

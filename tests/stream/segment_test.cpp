@@ -459,5 +459,22 @@ TEST(SegmentData, LowResolutionBunnyAfterRepair) {
     EXPECT_EQ(SegmentCharts(m, o), ids);
 }
 
+// A coarse box (two triangles per side, as in the Cornell boxes' OBJ files): every side
+// must be a chart of its own, since one polynomial across a 90-degree edge rings.
+TEST(Segment, CoarseBoxGetsOneChartPerSide) {
+    const std::vector<Vec3f> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                  {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    const std::vector<Tri> t = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                {2, 3, 7}, {2, 7, 6}, {1, 2, 6}, {1, 6, 5}, {0, 4, 7}, {0, 7, 3}};
+    const TriMesh box = Make(p, t);
+    const std::vector<uint32_t> chart = SegmentCharts(box, SegmentOptions{});
+    ASSERT_EQ(chart.size(), 12u);
+    for (size_t f = 0; f < 12; f += 2)
+        EXPECT_EQ(chart[f], chart[f + 1]) << "side " << f / 2 << " is split";
+    std::vector<uint32_t> ids(chart.begin(), chart.end());
+    std::sort(ids.begin(), ids.end());
+    EXPECT_EQ(std::unique(ids.begin(), ids.end()) - ids.begin(), 6);
+}
+
 }  // namespace
 }  // namespace mebake::stream
