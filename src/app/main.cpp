@@ -152,16 +152,16 @@ int main(int argc, char** argv) {
         "render", "Render a view of the baked lighting (pinhole camera, full-resolution mesh).");
     ren_cmd->add_option("dir", ren.dir, "Solved bake directory")->required();
     ren_cmd->add_option("-o,--output", ren.output, "Image: .exr (linear radiance) or .png (tone-mapped); '-' = EXR on stdout")->required();
-    ren_cmd->add_option("--eye", ren.eye, "Camera position x y z (default: a view of the whole scene)")->expected(3);
-    ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3);
-    ren_cmd->add_option("--up", ren.up, "Up direction x y z (default: the scene's up)")->expected(3);
+    ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a view of the whole scene)")->expected(3)->delimiter(',');
+    ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3)->delimiter(',');
+    ren_cmd->add_option("--up", ren.up, "Up direction x y z (default: the scene's up)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--fov", ren.fov, "Vertical field of view, degrees")->capture_default_str()
         ->check(CLI::Range(1.0, 179.0));
     ren_cmd->add_option("--size", ren.size, "Image size WIDTHxHEIGHT")->capture_default_str();
     ren_cmd->add_flag("--glossy", ren.glossy, "View-dependent glossy display (seed: L ~ Le + |E| fr)");
     ren_cmd->add_option("--samples", ren.samples, "Rays per pixel and axis (antialiasing)")->capture_default_str()
         ->check(CLI::Range(1, 16));
-    ren_cmd->add_option("--background", ren.background, "Radiance of missed rays r g b (default: the sky)")->expected(3);
+    ren_cmd->add_option("--background", ren.background, "Radiance of missed rays r g b (default: the sky)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--exposure", ren.exposure, "Exposure in stops (EV) for PNG")->capture_default_str();
     ren_cmd->add_option("--tonemap", ren.tonemap, "Tone curve for PNG")->capture_default_str()
         ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
