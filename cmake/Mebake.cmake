@@ -27,6 +27,7 @@ function(mebake_test name)
   target_compile_definitions(${name} PRIVATE
     MEBAKE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     MEBAKE_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data"
-    MEBAKE_BINARY="$<TARGET_FILE:mebake>")
+    MEBAKE_BINARY="$<TARGET_FILE:mebake>"
+    MEBAKE_MKSCAN="$<TARGET_FILE:mkscan>")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${T_LABELS}")
 endfunction()
