@@ -18,6 +18,15 @@ if command -v npm >/dev/null 2>&1 && [ ! -d build/gltfv/node_modules/gltf-valida
   (cd build/gltfv && npm install --silent --no-audit --no-fund gltf-validator >/dev/null 2>&1) ||
     echo "note: gltf-validator could not be installed; its tests will skip"
 fi
+# MeshLab's loader checks the vertex-coloured PLY (under a virtual X server, as it needs
+# OpenGL); the test skips where the packages cannot be installed.
+if ! command -v meshlabserver >/dev/null 2>&1 || ! command -v xvfb-run >/dev/null 2>&1; then
+  (export DEBIAN_FRONTEND=noninteractive
+   apt-get install -y -qq --no-install-recommends meshlab xvfb xauth libgl1-mesa-dri >/dev/null 2>&1 ||
+     { apt-get update -qq >/dev/null 2>&1 &&
+       apt-get install -y -qq --no-install-recommends meshlab xvfb xauth libgl1-mesa-dri >/dev/null 2>&1; }) ||
+    echo "note: meshlab/xvfb could not be installed; the MeshLab test will skip"
+fi
 ctest --test-dir build -j"$jobs" --output-on-failure --timeout 900
 
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
