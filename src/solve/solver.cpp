@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <queue>
 
 #include "core/check.h"
 #include "core/log.h"
@@ -163,37 +164,56 @@ void Solver::RefineDirect(uint32_t chart) {
         return m;
     };
 
-    // Depth-first refinement; an explicit stack keeps the node order deterministic.
-    std::vector<size_t> stack = {0};
-    while (!stack.empty()) {
-        size_t n = stack.back();
-        stack.pop_back();
-        QuadNode node = field.node(n);
-        // Lower orders need finer nodes for the same smooth field (E turns with the
-        // surface): a constant over a node covering 20 degrees of a sphere is off by 2%,
-        // which an albedo of 0.9 amplifies ninefold.
-        const int min_level = opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0);
+    // Every node gets its fit when it is made; nodes whose fit misses the control points
+    // wait in a queue ordered by integrated error (error x area), largest first, ties by
+    // node index (deterministic). When the chart's node budget runs out, the worst places
+    // have been refined and every node still holds its own fit: the budget degrades the
+    // whole chart evenly instead of leaving the last quadrants of a depth-first walk at
+    // the root's resolution.
+    const int min_level = opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0);
+    struct Candidate {
+        float priority;
+        size_t node;
+        bool operator<(const Candidate& o) const {
+            return priority != o.priority ? priority < o.priority : node > o.node;
+        }
+    };
+    std::priority_queue<Candidate> queue;
+    // Lower orders need finer nodes for the same smooth field (E turns with the surface):
+    // a constant over a node covering 20 degrees of a sphere is off by 2%, which an albedo
+    // of 0.9 amplifies ninefold. Nodes above min_level are split without a test.
+    std::vector<size_t> stack;
+    auto fit = [&](size_t n) {
+        const QuadNode node = field.node(n);
         if (int(node.level) < std::min(min_level, max_level)) {
-            int32_t first = field.Subdivide(n);
-            for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
-            continue;
+            stack.push_back(n);
+            return;
         }
         evaluate(node, ng, true);
         float scale = max_abs(vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
-        if (int(node.level) < max_level) {
-            evaluate(node, gc, false);
-            scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
-            float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
-            if (err > float(opt_.settings.tolerance) * scale &&
-                field.node_count() + 4 <= opt_.max_nodes_per_chart) {
-                int32_t first = field.Subdivide(n);
-                for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
-                continue;
-            }
-        }
         std::copy(coeffs.begin(), coeffs.end(), field.value(n));
         std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
+        if (int(node.level) >= max_level) return;
+        evaluate(node, gc, false);
+        scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
+        const float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
+        if (err > float(opt_.settings.tolerance) * scale)
+            queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
+    };
+    fit(0);
+    while (!stack.empty()) {
+        const size_t n = stack.back();
+        stack.pop_back();
+        const int32_t first = field.Subdivide(n);
+        for (int c = 3; c >= 0; --c) fit(size_t(first + c));
+    }
+    while (!queue.empty() && field.node_count() + 4 <= opt_.max_nodes_per_chart) {
+        const size_t n = queue.top().node;
+        queue.pop();
+        const int32_t first = field.Subdivide(n);
+        for (int c = 0; c < 4; ++c) fit(size_t(first + c));
+        CHECK(stack.empty());
     }
     field.Pull();
     spdlog::debug("chart {}: direct light refined to {} nodes (depth cap {})", chart,
