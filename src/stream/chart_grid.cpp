@@ -205,7 +205,8 @@ public:
                 continue;
             if (node.count > 0) {
                 for (uint32_t i = node.first; i < node.first + node.count; ++i)
-                    if (TriBoxDist2(tris_[prims_[i]], b) <= r2)
+                    if (BoxBoxDist2(b, boxes_[prims_[i]]) <= r2 &&  // a lower bound, cheap
+                        TriBoxDist2(tris_[prims_[i]], b) <= r2)
                         out->push_back(prims_[i]);
                 continue;
             }
@@ -279,14 +280,10 @@ struct LocateResult {
     double dist2 = 0;
 };
 
-LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
-    LocateResult r;
-    if (g.triangles.empty())
-        return r;
-    const Vec2d u(std::clamp(double(u_in.x), 0.0, 1.0), std::clamp(double(u_in.y), 0.0, 1.0));
-    const int res = g.resolution;
-    const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
-    const size_t cell = size_t(iy) * res + ix;
+// The real part of the query: true (and r filled) when u lies in a triangle of its cell,
+// or within kInsideDistance of one.
+bool LocateInside(const ChartGrid& g, const Vec2d& u, size_t cell, LocateResult* out) {
+    LocateResult& r = *out;
     for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
         double b[3];
         if (!Barycentric(TriangleAt(g, g.cell_tris[i]), u, b))
@@ -297,7 +294,7 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
         std::copy(b, b + 3, r.b);
         r.real = true;
         r.nearest = u;
-        return r;
+        return true;
     }
     // Within float resolution of a triangle (e.g. a rounded point of a boundary edge):
     // real, at the closest point.
@@ -311,10 +308,29 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
             r.real = true;
         }
     }
-    if (r.real) {
+    if (r.real)
         r.nearest = u;
+    return r.real;
+}
+
+size_t CellOf(const ChartGrid& g, const Vec2d& u) {
+    const int res = g.resolution;
+    const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
+    return size_t(iy) * res + ix;
+}
+
+Vec2d ClampToSquare(Vec2f u) {
+    return Vec2d(std::clamp(double(u.x), 0.0, 1.0), std::clamp(double(u.y), 0.0, 1.0));
+}
+
+LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
+    LocateResult r;
+    if (g.triangles.empty())
         return r;
-    }
+    const Vec2d u = ClampToSquare(u_in);
+    const size_t cell = CellOf(g, u);
+    if (LocateInside(g, u, cell, &r))
+        return r;
     // Virtual. A cell without candidates is inside the chart, so only rounding brings u
     // here: fall back to all outline triangles, which is exact too.
     const uint32_t* begin = g.near_tris.data() + g.near_start[cell];
@@ -502,6 +518,14 @@ GridLocation ChartGrid::Locate(Vec2f u) const {
     out.nearest_uv = Vec2f(float(r.nearest.x), float(r.nearest.y));
     out.distance = float(std::sqrt(r.dist2));
     return out;
+}
+
+uint32_t ChartGrid::InsideTriangle(Vec2f u_in) const {
+    if (triangles.empty())
+        return kNoTriangle;
+    const Vec2d u = ClampToSquare(u_in);
+    LocateResult r;
+    return LocateInside(*this, u, CellOf(*this, u), &r) ? r.triangle : kNoTriangle;
 }
 
 size_t ChartGrid::MemoryBytes() const {

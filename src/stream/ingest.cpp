@@ -1,11 +1,5 @@
 #include "stream/ingest.h"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cmath>
-#include <filesystem>
-
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -16,6 +10,12 @@
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
 #include "stream/spill.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
 
 namespace mebake::stream {
 
@@ -36,7 +36,8 @@ constexpr uint64_t kBytesPerBrickTriangle = 2000;
 void PrepareDirectory(const IngestOptions& opt) {
     const std::string& dir = opt.out_dir;
     if (fs::exists(dir)) {
-        if (!fs::is_directory(dir)) UsageError("{} exists and is not a directory", dir);
+        if (!fs::is_directory(dir))
+            UsageError("{} exists and is not a directory", dir);
         if (!fs::is_empty(dir)) {
             if (!opt.force)
                 UsageError("{} exists and is not empty; pass --force to replace it", dir);
@@ -57,7 +58,8 @@ void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
         char name[48];
         std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
         std::string part = dir + name;
-        if (!fs::exists(part)) continue;
+        if (!fs::exists(part))
+            continue;
         io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
         auto pos = r.Read(io::Tag("PPOS"));
         auto tri = r.Read(io::Tag("PTRI"));
@@ -73,7 +75,8 @@ void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
 }  // namespace
 
 Manifest Ingest(const IngestOptions& opt) {
-    if (opt.inputs.empty()) UsageError("no input mesh");
+    if (opt.inputs.empty())
+        UsageError("no input mesh");
     if (std::count(opt.inputs.begin(), opt.inputs.end(), "-") > 1)
         UsageError("stdin ('-') can be read only once");
     PrepareDirectory(opt);
@@ -112,7 +115,8 @@ Manifest Ingest(const IngestOptions& opt) {
     m.bbox_min = sr.bbox_min;
     m.bbox_max = sr.bbox_max;
     m.timings.emplace_back("spill", Since(t0));
-    if (sr.face_count == 0) InputError({opt.inputs[0]}, "the input has no faces to bake onto");
+    if (sr.face_count == 0)
+        InputError({opt.inputs[0]}, "the input has no faces to bake onto");
     spdlog::info("spilled {} vertices, {} triangles in {}", FormatCount(double(sr.vertex_count)),
                  FormatCount(double(sr.face_count)), FormatSeconds(Since(t0)));
     m.state = "spilled";
@@ -129,8 +133,8 @@ Manifest Ingest(const IngestOptions& opt) {
     m.surface_area = plan.surface_area;
     m.texel_size = opt.texel_size > 0
                        ? opt.texel_size
-                       : std::sqrt(plan.surface_area /
-                                   (0.5 * double(opt.lightmap_resolution) * opt.lightmap_resolution));
+                       : std::sqrt(plan.surface_area / (0.5 * double(opt.lightmap_resolution) *
+                                                        opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
     spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {}", plan.bricks.size(),
                  FormatCount(double(bopt.max_faces)), m.texel_size, FormatSeconds(Since(t1)));
@@ -163,9 +167,13 @@ Manifest Ingest(const IngestOptions& opt) {
             std::fprintf(stderr, "\r  charts: brick %u/%zu (%s)   ", n, plan.bricks.size(),
                          FormatSeconds(Since(t2)).c_str());
     });
-    if (tty) std::fprintf(stderr, "\n");
+    if (tty)
+        std::fprintf(stderr, "\n");
     uint64_t splits = 0, holes = 0;
+    std::array<double, kChartStageNames.size()> stage_seconds{};
     for (auto& r : results) {
+        for (size_t k = 0; k < stage_seconds.size(); ++k)
+            stage_seconds[k] += r.stage_seconds[k];
         for (size_t k = 0; k < r.charts.size(); ++k) {
             uint32_t id = uint32_t(m.charts.size());
             fs::rename(r.tile_files[k], TilePath(dir, id));
@@ -175,6 +183,9 @@ Manifest Ingest(const IngestOptions& opt) {
         holes += r.repair.holes_filled;
     }
     m.timings.emplace_back("charts", Since(t2));
+    // Per-stage thread-seconds summed over the bricks (they overlap when threads > 1).
+    for (size_t k = 0; k < stage_seconds.size(); ++k)
+        m.timings.emplace_back(std::string("charts.") + kChartStageNames[k], stage_seconds[k]);
     spdlog::info("{} charts ({} splits, {} holes filled) in {}", m.charts.size(), splits, holes,
                  FormatSeconds(Since(t2)));
 

@@ -48,6 +48,9 @@ constexpr int kSmoothingPasses = 3;
 // The share of a chart's area whose normal must lie within the deviation bound: the rest
 // is left to noise and small bumps.
 constexpr double kDeviationQuantile = 0.95;
+// Lloyd iterations stop early once at most 1 / kSettledFraction of the faces change chart
+// (late iterations on scans move 2-7% of the faces back and forth along the borders).
+constexpr size_t kSettledFraction = 64;
 
 struct Surface {
     const std::vector<Tri>& tris;
@@ -293,12 +296,24 @@ void FitAndReseed(const Surface& s, const Segmenter& seg, uint32_t min_faces,
 
 void Lloyd(const Surface& s, Segmenter& seg, int iterations, uint32_t min_faces, bool discs,
            std::vector<Proxy>& proxies, std::vector<uint32_t>& chart, SegmentReport& report) {
+    std::vector<uint32_t> previous;
     for (int it = 0; it < iterations; ++it) {
+        previous.swap(chart);
         seg.Partition(proxies, chart, discs);
         ++report.lloyd_iterations;
+        // Settled: so few faces moved that further passes would only shuffle the borders.
+        size_t moved = chart.size();
+        if (previous.size() == chart.size()) {
+            moved = 0;
+            for (size_t f = 0; f < chart.size(); ++f)
+                moved += previous[f] != chart[f];
+        }
+        const bool last = it + 1 == iterations || moved <= chart.size() / kSettledFraction;
         // Small charts are dropped between passes (their faces seed again if nobody takes
         // them), kept after the last.
-        FitAndReseed(s, seg, it + 1 < iterations ? min_faces : 1, proxies, chart);
+        FitAndReseed(s, seg, last ? 1 : min_faces, proxies, chart);
+        if (last)
+            break;
     }
 }
 
