@@ -32,6 +32,10 @@ double Since(Clock::time_point t) {
 // (OpenMesh, Eigen factorizations), measured with /usr/bin/time on the scans; the brick
 // size follows from it and the budget.
 constexpr uint64_t kBytesPerBrickTriangle = 2000;
+// Bricks processed at once (each also runs parallel loops inside). A constant, not the
+// thread count, so the brick layout and hence every tile's bytes do not depend on
+// --threads.
+constexpr int kBricksInFlight = 2;
 
 void PrepareDirectory(const IngestOptions& opt) {
     const std::string& dir = opt.out_dir;
@@ -82,7 +86,6 @@ Manifest Ingest(const IngestOptions& opt) {
     PrepareDirectory(opt);
     const std::string& dir = opt.out_dir;
     ThreadLimit limit(opt.threads);
-    const int threads = MaxThreads();
     Manifest m;
     m.memory_budget = opt.memory;
     m.max_distortion = opt.max_distortion;
@@ -124,8 +127,8 @@ Manifest Ingest(const IngestOptions& opt) {
     // Pass 2: bricks.
     auto t1 = Clock::now();
     BinOptions bopt;
-    bopt.max_faces = std::clamp<uint64_t>(opt.memory / (uint64_t(threads) * kBytesPerBrickTriangle),
-                                          20000, 400000);
+    bopt.max_faces = std::clamp<uint64_t>(
+        opt.memory / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
     bopt.cache_bytes = std::min<uint64_t>(opt.memory / 8, uint64_t(64) << 20);
     BrickPlan plan = BinFaces(dir, sr, bopt);
     m.brick_faces = bopt.max_faces;
@@ -144,28 +147,39 @@ Manifest Ingest(const IngestOptions& opt) {
     ChartBuildOptions copt;
     copt.texel_size = m.texel_size;
     copt.max_distortion = opt.max_distortion;
-    copt.cache_bytes = std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(threads)));
+    copt.cache_bytes =
+        std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(kBricksInFlight)));
     std::vector<BrickResult> results(plan.bricks.size());
     std::atomic<uint32_t> done{0};
     const bool tty = StderrIsTerminal();
-    ParallelFor(0, int64_t(plan.bricks.size()), [&](int64_t b) {
-        BrickResult r = BuildBrickCharts(dir, uint32_t(b), copt);
-        // The brick's visibility part goes to disk now, so memory does not accumulate.
-        {
-            char name[48];
-            std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", uint32_t(b));
-            io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
-            w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
-            w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
-            w.Finish();
-            std::vector<Vec3f>().swap(r.proxy_positions);
-            std::vector<uint32_t>().swap(r.proxy_triangles);
+    // kBricksInFlight workers take bricks in turn; each brick writes only its own files
+    // and result slot, so which worker runs it does not matter.
+    std::atomic<uint32_t> next{0};
+    std::atomic<bool> failed{false};
+    const uint32_t brick_count = uint32_t(plan.bricks.size());
+    ParallelFor(0, kBricksInFlight, [&](int64_t) {
+        for (uint32_t b = next++; b < brick_count && !failed; b = next++) {
+            try {
+                BrickResult r = BuildBrickCharts(dir, b, copt);
+                // The brick's visibility part goes to disk now, so memory does not accumulate.
+                char name[48];
+                std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
+                io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
+                w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
+                w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
+                w.Finish();
+                std::vector<Vec3f>().swap(r.proxy_positions);
+                std::vector<uint32_t>().swap(r.proxy_triangles);
+                results[b] = std::move(r);
+            } catch (...) {
+                failed = true;
+                throw;
+            }
+            uint32_t n = ++done;
+            if (tty)
+                std::fprintf(stderr, "\r  charts: brick %u/%u (%s)   ", n, brick_count,
+                             FormatSeconds(Since(t2)).c_str());
         }
-        results[size_t(b)] = std::move(r);
-        uint32_t n = ++done;
-        if (tty)
-            std::fprintf(stderr, "\r  charts: brick %u/%zu (%s)   ", n, plan.bricks.size(),
-                         FormatSeconds(Since(t2)).c_str());
     });
     if (tty)
         std::fprintf(stderr, "\n");
