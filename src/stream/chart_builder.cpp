@@ -3,6 +3,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/paged_file.h"
+#include "core/parallel.h"
 #include "stream/bricks.h"
 #include "stream/chart_grid.h"
 #include "stream/parameterize.h"
@@ -86,7 +87,9 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
     const int k = 2;  // sub-samples per texel side, for coverage and area
     const double texel_uv = 1.0 / res;
     const double s2 = param.scale * param.scale;
-    for (uint32_t j = 0; j < res; ++j) {
+    // Rows in parallel (each texel is written by its own iteration only).
+    ParallelFor(0, int64_t(res), [&](int64_t row) {
+        const uint32_t j = uint32_t(row);
         for (uint32_t i = 0; i < res; ++i) {
             GeometryTexel& t = fine[size_t(j) * res + i];
             Vec2f centre(float((i + 0.5) * texel_uv), float((j + 0.5) * texel_uv));
@@ -129,7 +132,7 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
                 }
             }
         }
-    }
+    });
     img.BuildPyramid();
     return img;
 }

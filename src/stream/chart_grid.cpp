@@ -164,9 +164,16 @@ public:
     }
 
     // Index (into the outline list) of the triangle nearest to u; lowest index on ties.
-    uint32_t Nearest(const Vec2d& u) {
+    // `hint` (an outline index or kNoTriangle), e.g. the previous cell's answer, only
+    // tightens the search bound: equally near triangles are still visited, so the
+    // answer does not depend on it.
+    uint32_t Nearest(const Vec2d& u, uint32_t hint = kNoTriangle) {
         uint32_t best = kNoTriangle;
         double best_d2 = INFINITY;
+        if (hint != kNoTriangle) {
+            best = hint;
+            best_d2 = ClosestPoint(tris_[hint], u).dist2;
+        }
         std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
         stack.assign(1, 0);
         while (!stack.empty()) {
@@ -470,6 +477,7 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
 
     g.near_start.assign(cell_count + 1, 0);
     std::vector<uint32_t> found;
+    uint32_t previous_nearest = kNoTriangle;
     for (size_t c = 0; c < cell_count; ++c) {
         g.near_start[c + 1] = g.near_start[c];
         if (tri_count == 0)
@@ -490,7 +498,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
         if (!touches_outline && centre_inside)
             continue;
 
-        const uint32_t nearest = bvh.Nearest(centre);
+        const uint32_t nearest = bvh.Nearest(centre, previous_nearest);
+        previous_nearest = nearest;
         double ub2 = 0;
         const Vec2d corners[4] = {box.lo, {box.hi.x, box.lo.y}, box.hi, {box.lo.x, box.hi.y}};
         for (const Vec2d& corner : corners)
