@@ -92,14 +92,19 @@ Manifest Ingest(const IngestOptions& opt) {
 
     // Pass 1: spill.
     auto t0 = Clock::now();
-    Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(96) << 20));
-    for (const auto& path : opt.inputs) {
-        auto in = io::InputStream::Open(path);
-        io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
-        spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
-        io::ReadMesh(*in, format, spill.BeginInput(path));
+    SpillResult sr;
+    {
+        // Scoped: the spill's page caches are freed before the passes that follow.
+        // Appends only: a few pages per file are enough to write in large blocks.
+        Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(12) << 20));
+        for (const auto& path : opt.inputs) {
+            auto in = io::InputStream::Open(path);
+            io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
+            spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
+            io::ReadMesh(*in, format, spill.BeginInput(path));
+        }
+        sr = spill.Finish();
     }
-    const SpillResult& sr = spill.Finish();
     for (const auto& in : sr.inputs) {
         InputRecord r;
         r.path = in.source;
@@ -120,8 +125,9 @@ Manifest Ingest(const IngestOptions& opt) {
     m.timings.emplace_back("spill", Since(t0));
     if (sr.face_count == 0)
         InputError({opt.inputs[0]}, "the input has no faces to bake onto");
-    spdlog::info("spilled {} vertices, {} triangles in {}", FormatCount(double(sr.vertex_count)),
-                 FormatCount(double(sr.face_count)), FormatSeconds(Since(t0)));
+    spdlog::info("spilled {} vertices, {} triangles in {} (peak memory {})",
+                 FormatCount(double(sr.vertex_count)), FormatCount(double(sr.face_count)),
+                 FormatSeconds(Since(t0)), FormatBytes(PeakRssBytes()));
     m.state = "spilled";
 
     // Pass 2: bricks.
@@ -129,7 +135,10 @@ Manifest Ingest(const IngestOptions& opt) {
     BinOptions bopt;
     bopt.max_faces = std::clamp<uint64_t>(
         opt.memory / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
-    bopt.cache_bytes = std::min<uint64_t>(opt.memory / 8, uint64_t(64) << 20);
+    // Caches no larger than the files they cache (small meshes need little memory).
+    const uint64_t spilled_bytes = sr.vertex_count * 16 + sr.face_count * 16;
+    bopt.cache_bytes = std::min<uint64_t>(
+        {opt.memory / 8, uint64_t(64) << 20, 4 * spilled_bytes + (uint64_t(4) << 20)});
     BrickPlan plan = BinFaces(dir, sr, bopt);
     m.brick_faces = bopt.max_faces;
     m.brick_count = uint32_t(plan.bricks.size());
@@ -139,16 +148,18 @@ Manifest Ingest(const IngestOptions& opt) {
                        : std::sqrt(plan.surface_area / (0.5 * double(opt.lightmap_resolution) *
                                                         opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
-    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {}", plan.bricks.size(),
-                 FormatCount(double(bopt.max_faces)), m.texel_size, FormatSeconds(Since(t1)));
+    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
+                 plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
+                 FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
 
     // Pass 3: charts, bricks in parallel (each writes only its own files).
     auto t2 = Clock::now();
     ChartBuildOptions copt;
     copt.texel_size = m.texel_size;
     copt.max_distortion = opt.max_distortion;
-    copt.cache_bytes =
-        std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(kBricksInFlight)));
+    copt.cache_bytes = std::min<uint64_t>(
+        std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(kBricksInFlight))),
+        3 * sr.vertex_count * 12 + (uint64_t(3) << 20));
     std::vector<BrickResult> results(plan.bricks.size());
     std::atomic<uint32_t> done{0};
     const bool tty = StderrIsTerminal();
@@ -200,8 +211,8 @@ Manifest Ingest(const IngestOptions& opt) {
     // Per-stage thread-seconds summed over the bricks (they overlap when threads > 1).
     for (size_t k = 0; k < stage_seconds.size(); ++k)
         m.timings.emplace_back(std::string("charts.") + kChartStageNames[k], stage_seconds[k]);
-    spdlog::info("{} charts ({} splits, {} holes filled) in {}", m.charts.size(), splits, holes,
-                 FormatSeconds(Since(t2)));
+    spdlog::info("{} charts ({} splits, {} holes filled) in {} (peak memory {})", m.charts.size(),
+                 splits, holes, FormatSeconds(Since(t2)), FormatBytes(PeakRssBytes()));
 
     // Pass 4: the visibility mesh.
     auto t3 = Clock::now();
