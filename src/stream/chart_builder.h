@@ -30,7 +30,7 @@ struct ChartBuildOptions {
     // to -35% (lucy). Charts over max_distortion are still split.
     int refine_iterations = 10;            // local/global iterations of the parameterization
     int lloyd_iterations = 4;              // segmentation passes before the first bound check
-    size_t cache_bytes = size_t(8) << 20;  // vertex look-ups for this brick
+    size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 
 struct BrickResult {

@@ -157,9 +157,9 @@ Manifest Ingest(const IngestOptions& opt) {
     ChartBuildOptions copt;
     copt.texel_size = m.texel_size;
     copt.max_distortion = opt.max_distortion;
-    copt.cache_bytes = std::min<uint64_t>(
-        std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(kBricksInFlight))),
-        3 * sr.vertex_count * 12 + (uint64_t(3) << 20));
+    // A brick reads its vertices in ascending id order, each page once: a few pages per
+    // file are enough, and a fixed size keeps peak memory independent of the mesh.
+    copt.cache_bytes = uint64_t(3) << 20;
     std::vector<BrickResult> results(plan.bricks.size());
     std::atomic<uint32_t> done{0};
     const bool tty = StderrIsTerminal();
