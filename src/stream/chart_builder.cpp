@@ -140,7 +140,8 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
 // Adds the time since the last Lap (or construction) to one stage's total.
 class StageClock {
 public:
-    explicit StageClock(std::array<double, 7>* totals) : totals_(totals), last_(Clock::now()) {}
+    explicit StageClock(std::array<double, kChartStageNames.size()>* totals)
+        : totals_(totals), last_(Clock::now()) {}
     void Lap(size_t stage) {
         const auto now = Clock::now();
         (*totals_)[stage] += std::chrono::duration<double>(now - last_).count();
@@ -149,7 +150,7 @@ public:
 
 private:
     using Clock = std::chrono::steady_clock;
-    std::array<double, 7>* totals_;
+    std::array<double, kChartStageNames.size()>* totals_;
     Clock::time_point last_;
 };
 enum Stage : size_t { kLoad, kRepair, kSegment, kParameterize, kGrid, kGeometry, kWrite };

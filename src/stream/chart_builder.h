@@ -16,6 +16,10 @@
 
 namespace mebake::stream {
 
+// Stages of BuildBrickCharts, timed separately (BrickResult::stage_seconds).
+inline constexpr std::array<const char*, 7> kChartStageNames = {
+    "load", "repair", "segment", "parameterize", "grid", "geometry", "write"};
+
 struct ChartBuildOptions {
     double texel_size = 0.01;     // 3D size of a light-map texel
     uint32_t min_resolution = 4;  // light-map texels per chart side, powers of two
@@ -40,14 +44,11 @@ struct BrickResult {
     uint64_t splits = 0;  // charts split for distortion or topology
     // Seconds spent per stage in this brick (wall time of the calling thread), in the
     // order of kChartStageNames.
-    std::array<double, 7> stage_seconds{};
+    std::array<double, kChartStageNames.size()> stage_seconds{};
     // The brick's repaired surface, for the visibility mesh.
     std::vector<Vec3f> proxy_positions;
     std::vector<uint32_t> proxy_triangles;
 };
-
-inline constexpr std::array<const char*, 7> kChartStageNames = {
-    "load", "repair", "segment", "parameterize", "grid", "geometry", "write"};
 
 BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt);
 
