@@ -1,31 +1,36 @@
 #include "stream/bricks.h"
 
-#include <fcntl.h>
-#include <lz4.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cerrno>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
-
 #include "core/check.h"
 #include "core/checksum.h"
 #include "core/error.h"
 #include "core/paged_file.h"
 
+#include <lz4.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <unistd.h>
+
 namespace mebake::stream {
 
 namespace {
 
-constexpr int kLevel = 7;                       // 128^3 cells
+constexpr int kLevel = 7;                        // 128^3 cells
 constexpr uint32_t kCells = 1u << (3 * kLevel);  // 2M cells: 8 MB of counts
-constexpr size_t kFlushBytes = size_t(256) << 10;
+// Write buffers of all bricks together hold at most kBufferBytes (each between the two
+// bounds), and a brick file is open only while a block is written: neither memory nor file
+// descriptors grow with the number of bricks.
+constexpr size_t kBufferBytes = size_t(8) << 20;
+constexpr size_t kMinFlushBytes = size_t(16) << 10, kMaxFlushBytes = size_t(256) << 10;
 
 uint32_t Spread3(uint32_t x) {  // 7 bits -> every third bit
     uint32_t r = 0;
-    for (int i = 0; i < kLevel; ++i) r |= ((x >> i) & 1u) << (3 * i);
+    for (int i = 0; i < kLevel; ++i)
+        r |= ((x >> i) & 1u) << (3 * i);
     return r;
 }
 
@@ -49,20 +54,25 @@ struct CellMapper {
 // Appends LZ4 blocks to a brick file: [u32 raw bytes][u32 stored bytes][u32 crc][data].
 class BrickFile {
 public:
-    explicit BrickFile(std::string path) : path_(std::move(path)) {}
+    BrickFile(std::string path, size_t flush_bytes)
+        : path_(std::move(path)), flush_bytes_(flush_bytes) {}
     ~BrickFile() {
-        if (fd_ >= 0) ::close(fd_);
+        if (fd_ >= 0)
+            ::close(fd_);
     }
     void Add(const BrickFace& f) {
         buffer_.push_back(f);
-        if (buffer_.size() * sizeof(BrickFace) >= kFlushBytes) Flush();
+        if (buffer_.size() * sizeof(BrickFace) >= flush_bytes_)
+            Flush();
     }
     void Flush() {
-        if (buffer_.empty()) return;
-        if (fd_ < 0) {
-            fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-            if (fd_ < 0) IoError({path_}, "cannot create: {}", ErrnoString(errno));
-        }
+        if (buffer_.empty())
+            return;
+        const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (created_ ? O_APPEND : O_TRUNC);
+        fd_ = ::open(path_.c_str(), flags, 0644);
+        if (fd_ < 0)
+            IoError({path_}, "cannot create: {}", ErrnoString(errno));
+        created_ = true;
         int raw = int(buffer_.size() * sizeof(BrickFace));
         std::vector<char> out(12 + size_t(LZ4_compressBound(raw)));
         int n = LZ4_compress_default(reinterpret_cast<const char*>(buffer_.data()), out.data() + 12,
@@ -73,21 +83,28 @@ public:
         size_t total = 12 + size_t(n), done = 0;
         while (done < total) {
             ssize_t w = ::write(fd_, out.data() + done, total - done);
-            if (w < 0 && errno == EINTR) continue;
-            if (w < 0) IoError({path_}, "write failed: {}", ErrnoString(errno));
+            if (w < 0 && errno == EINTR)
+                continue;
+            if (w < 0)
+                IoError({path_}, "write failed: {}", ErrnoString(errno));
             done += size_t(w);
         }
         buffer_.clear();
+        const int fd = fd_;
+        fd_ = -1;
+        if (::close(fd) != 0)
+            IoError({path_}, "close failed: {}", ErrnoString(errno));
     }
     void Close() {
         Flush();
-        if (fd_ >= 0 && ::close(fd_) != 0) IoError({path_}, "close failed: {}", ErrnoString(errno));
-        fd_ = -1;
+        std::vector<BrickFace>().swap(buffer_);
     }
 
 private:
     std::string path_;
+    size_t flush_bytes_;
     int fd_ = -1;
+    bool created_ = false;
     std::vector<BrickFace> buffer_;
 };
 
@@ -99,7 +116,9 @@ std::string BrickPath(const std::string& dir, uint32_t brick) {
     return dir + name;
 }
 
-std::string OwnersPath(const std::string& dir) { return dir + "/owners.bin"; }
+std::string OwnersPath(const std::string& dir) {
+    return dir + "/owners.bin";
+}
 
 BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOptions& opt) {
     BrickPlan plan;
@@ -117,7 +136,8 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
     for (uint64_t f = 0; f < spill.face_count; ++f) {
         SpillFace sf = faces.Get(f);
         Vec3d p[3];
-        for (int c = 0; c < 3; ++c) p[c] = Vec3d(vertices.Get(sf.v[c]));
+        for (int c = 0; c < 3; ++c)
+            p[c] = Vec3d(vertices.Get(sf.v[c]));
         uint32_t cell = mapper.Cell((p[0] + p[1] + p[2]) * (1.0 / 3));
         cells.Push(cell);
         ++count[cell];
@@ -128,16 +148,19 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
     // 2. Bricks: leaves of the octree with <= max_faces faces, in Morton order, then
     // consecutive leaves merged while they fit.
     std::vector<uint64_t> prefix(size_t(kCells) + 1, 0);
-    for (uint32_t c = 0; c < kCells; ++c) prefix[c + 1] = prefix[c] + count[c];
+    for (uint32_t c = 0; c < kCells; ++c)
+        prefix[c + 1] = prefix[c] + count[c];
     std::vector<std::pair<uint32_t, uint32_t>> leaves;  // [first, end) cell ranges
     auto recurse = [&](auto&& self, uint32_t first, uint32_t size) -> void {
         uint64_t n = prefix[first + size] - prefix[first];
-        if (n == 0) return;
+        if (n == 0)
+            return;
         if (n <= opt.max_faces || size == 1) {
             leaves.emplace_back(first, first + size);
             return;
         }
-        for (uint32_t k = 0; k < 8; ++k) self(self, first + k * (size / 8), size / 8);
+        for (uint32_t k = 0; k < 8; ++k)
+            self(self, first + k * (size / 8), size / 8);
     };
     recurse(recurse, 0, kCells);
     std::vector<uint32_t> brick_of_cell(kCells, 0);
@@ -148,7 +171,8 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
         BrickInfo& b = plan.bricks.back();
         b.face_count += n;
         b.end_cell = end;
-        for (uint32_t c = first; c < end; ++c) brick_of_cell[c] = uint32_t(plan.bricks.size() - 1);
+        for (uint32_t c = first; c < end; ++c)
+            brick_of_cell[c] = uint32_t(plan.bricks.size() - 1);
     }
     std::vector<uint32_t>().swap(count);
     std::vector<uint64_t>().swap(prefix);
@@ -157,11 +181,16 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
     {
         DiskArray<uint32_t> owners(OwnersPath(dir), true, cache);
         const uint32_t none = kOwnerNone;
-        for (uint64_t v = 0; v < spill.vertex_count; ++v) owners.Push(none);
+        for (uint64_t v = 0; v < spill.vertex_count; ++v)
+            owners.Push(none);
         std::vector<BrickFile> files;
         files.reserve(plan.bricks.size());
-        for (uint32_t b = 0; b < plan.bricks.size(); ++b) files.emplace_back(BrickPath(dir, b));
-        for (auto& b : plan.bricks) b.face_count = 0;
+        const size_t flush_bytes = std::clamp(
+            kBufferBytes / std::max<size_t>(plan.bricks.size(), 1), kMinFlushBytes, kMaxFlushBytes);
+        for (uint32_t b = 0; b < plan.bricks.size(); ++b)
+            files.emplace_back(BrickPath(dir, b), flush_bytes);
+        for (auto& b : plan.bricks)
+            b.face_count = 0;
         for (uint64_t f = 0; f < spill.face_count; ++f) {
             SpillFace sf = faces.Get(f);
             uint32_t brick = brick_of_cell[cells.Get(f)];
@@ -169,11 +198,14 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
             ++plan.bricks[brick].face_count;
             for (int c = 0; c < 3; ++c) {
                 uint32_t o = owners.Get(sf.v[c]);
-                if (o == kOwnerNone) owners.Set(sf.v[c], brick);
-                else if (o != brick && o != kOwnerShared) owners.Set(sf.v[c], kOwnerShared);
+                if (o == kOwnerNone)
+                    owners.Set(sf.v[c], brick);
+                else if (o != brick && o != kOwnerShared)
+                    owners.Set(sf.v[c], kOwnerShared);
             }
         }
-        for (auto& file : files) file.Close();
+        for (auto& file : files)
+            file.Close();
         owners.Flush();
     }
     std::filesystem::remove(dir + "/cells.bin");
@@ -185,7 +217,8 @@ std::vector<BrickFace> ReadBrick(const std::string& dir, uint32_t brick) {
     std::vector<BrickFace> out;
     int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) {
-        if (errno == ENOENT) return out;  // a brick whose faces were all elsewhere
+        if (errno == ENOENT)
+            return out;  // a brick whose faces were all elsewhere
         IoError({path}, "cannot open: {}", ErrnoString(errno));
     }
     std::vector<char> block;
@@ -193,7 +226,8 @@ std::vector<BrickFace> ReadBrick(const std::string& dir, uint32_t brick) {
     for (;;) {
         uint32_t head[3];
         ssize_t n = ::pread(fd, head, 12, off_t(offset));
-        if (n == 0) break;
+        if (n == 0)
+            break;
         if (n != 12) {
             ::close(fd);
             CorruptError({path, offset}, "truncated block header");

@@ -1,18 +1,20 @@
 #include "stream/chart_builder.h"
 
-#include <algorithm>
-#include <cmath>
-#include <deque>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "core/paged_file.h"
+#include "core/parallel.h"
 #include "stream/bricks.h"
 #include "stream/chart_grid.h"
 #include "stream/parameterize.h"
 #include "stream/segment.h"
 #include "stream/spill.h"
 #include "stream/tile.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
 
 namespace mebake::stream {
 
@@ -24,7 +26,8 @@ TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
     std::vector<BrickFace> faces = ReadBrick(dir, brick);
     std::vector<uint64_t> ids;
     ids.reserve(faces.size() * 3);
-    for (const auto& f : faces) ids.insert(ids.end(), f.v, f.v + 3);
+    for (const auto& f : faces)
+        ids.insert(ids.end(), f.v, f.v + 3);
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
 
@@ -65,7 +68,8 @@ TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
 uint32_t ResolutionFor(double scale, const ChartBuildOptions& opt) {
     double want = scale / opt.texel_size;
     uint32_t r = opt.min_resolution;
-    while (r < opt.max_resolution && double(r) * std::sqrt(2.0) < want) r *= 2;
+    while (r < opt.max_resolution && double(r) * std::sqrt(2.0) < want)
+        r *= 2;
     return r;
 }
 
@@ -75,14 +79,17 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
     GeometryImage img;
     img.resolution = res;
     int levels = 0;
-    while ((1u << levels) < res) ++levels;
+    while ((1u << levels) < res)
+        ++levels;
     img.levels.resize(size_t(levels) + 1);
     auto& fine = img.levels.back();
     fine.resize(size_t(res) * res);
     const int k = 2;  // sub-samples per texel side, for coverage and area
     const double texel_uv = 1.0 / res;
     const double s2 = param.scale * param.scale;
-    for (uint32_t j = 0; j < res; ++j) {
+    // Rows in parallel (each texel is written by its own iteration only).
+    ParallelFor(0, int64_t(res), [&](int64_t row) {
+        const uint32_t j = uint32_t(row);
         for (uint32_t i = 0; i < res; ++i) {
             GeometryTexel& t = fine[size_t(j) * res + i];
             Vec2f centre(float((i + 0.5) * texel_uv), float((j + 0.5) * texel_uv));
@@ -95,11 +102,13 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
             int real = 0;
             for (int b = 0; b < k; ++b) {
                 for (int a = 0; a < k; ++a) {
-                    Vec2f u(float((i + (a + 0.5) / k) * texel_uv), float((j + (b + 0.5) / k) * texel_uv));
-                    GridLocation loc = grid.Locate(u);
-                    if (!loc.real) continue;
+                    Vec2f u(float((i + (a + 0.5) / k) * texel_uv),
+                            float((j + (b + 0.5) / k) * texel_uv));
+                    const uint32_t inside = grid.InsideTriangle(u);
+                    if (inside == kNoTriangle)
+                        continue;
                     ++real;
-                    area += double(param.area_ratio[loc.triangle]) * s2 * texel_uv * texel_uv / (k * k);
+                    area += double(param.area_ratio[inside]) * s2 * texel_uv * texel_uv / (k * k);
                 }
             }
             t.area = float(area);
@@ -108,7 +117,8 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
             if (tri != kNoTriangle) {
                 t.material = chart.material[tri];
                 if (!chart.albedo.empty()) {
-                    GridLocation loc = grid.Locate(sp.real ? centre : grid.Locate(centre).nearest_uv);
+                    GridLocation loc =
+                        grid.Locate(sp.real ? centre : grid.Locate(centre).nearest_uv);
                     Vec3f c{};
                     bool ok = true;
                     for (int v = 0; v < 3; ++v) {
@@ -122,10 +132,28 @@ GeometryImage SampleGeometry(const TriMesh& chart, const ChartParam& param, cons
                 }
             }
         }
-    }
+    });
     img.BuildPyramid();
     return img;
 }
+
+// Adds the time since the last Lap (or construction) to one stage's total.
+class StageClock {
+public:
+    explicit StageClock(std::array<double, kChartStageNames.size()>* totals)
+        : totals_(totals), last_(Clock::now()) {}
+    void Lap(size_t stage) {
+        const auto now = Clock::now();
+        (*totals_)[stage] += std::chrono::duration<double>(now - last_).count();
+        last_ = now;
+    }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    std::array<double, kChartStageNames.size()>* totals_;
+    Clock::time_point last_;
+};
+enum Stage : size_t { kLoad, kRepair, kSegment, kParameterize, kGrid, kGeometry, kWrite };
 
 }  // namespace
 
@@ -135,13 +163,17 @@ constexpr float kCreaseCos = 0.866f;
 
 BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt) {
     BrickResult out;
+    StageClock clock(&out.stage_seconds);
     std::vector<uint8_t> on_cut;
     TriMesh mesh = LoadBrick(dir, brick, opt.cache_bytes, &on_cut);
-    if (mesh.triangles.empty()) return out;
+    clock.Lap(kLoad);
+    if (mesh.triangles.empty())
+        return out;
     out.repair = Repair(mesh, on_cut, RepairOptions{});
     out.proxy_positions = mesh.position;
     out.proxy_triangles.reserve(mesh.triangles.size() * 3);
-    for (const auto& t : mesh.triangles) out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
+    for (const auto& t : mesh.triangles)
+        out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
 
     // Normals over the whole repaired brick, so a vertex on a chart border has the same
     // normal in every chart that holds it (per-chart normals made seams). Looked up by
@@ -150,7 +182,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     {
         const std::vector<Vec3f> n = VertexNormals(mesh.position, mesh.triangles);
         brick_normals.reserve(n.size());
-        for (size_t v = 0; v < n.size(); ++v) brick_normals.emplace_back(mesh.vertex_id[v], n[v]);
+        for (size_t v = 0; v < n.size(); ++v)
+            brick_normals.emplace_back(mesh.vertex_id[v], n[v]);
         std::sort(brick_normals.begin(), brick_normals.end(),
                   [](const auto& a, const auto& b) { return a.first < b.first; });
         size_t kept = 0;
@@ -168,36 +201,44 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         auto it = std::lower_bound(brick_normals.begin(), brick_normals.end(), id,
                                    [](const auto& a, uint64_t x) { return a.first < x; });
         return it != brick_normals.end() && it->first == id && Length(it->second) > 0 ? it->second
-                                                                                       : fallback;
+                                                                                      : fallback;
     };
 
+    clock.Lap(kRepair);
     SegmentOptions sopt;
     sopt.max_chart_vertices = opt.max_chart_vertices;
+    sopt.lloyd_iterations = opt.lloyd_iterations;
     std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, nullptr);
-    uint32_t chart_count = 0;
-    for (uint32_t c : chart_of) chart_count = std::max(chart_count, c + 1);
 
     // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
     // in two and both halves go back to the front of the queue, so the order stays fixed.
     std::deque<std::pair<TriMesh, int>> queue;
-    for (uint32_t c = 0; c < chart_count; ++c) queue.emplace_back(ExtractChart(mesh, chart_of, c), 0);
+    for (TriMesh& chart : ExtractCharts(mesh, chart_of))
+        queue.emplace_back(std::move(chart), 0);
     ParamOptions popt;
     popt.max_jacobian_deviation = opt.max_distortion;
+    popt.refine_options.max_iterations = opt.refine_iterations;
+    clock.Lap(kSegment);
     while (!queue.empty()) {
         auto [chart, depth] = std::move(queue.front());
         queue.pop_front();
-        if (chart.triangles.empty()) continue;
+        if (chart.triangles.empty())
+            continue;
         ChartParam param = ParameterizeChart(chart, popt);
+        clock.Lap(kParameterize);
         const bool can_split = chart.triangles.size() > 1 && depth < 24;
         if (param.status != ParamStatus::kOk && can_split &&
             (param.status == ParamStatus::kDistorted || !HasUv(param.status) ||
              param.status == ParamStatus::kFlipped)) {
             std::vector<uint32_t> half = SplitChart(chart, 2);
             uint32_t parts = 0;
-            for (uint32_t h : half) parts = std::max(parts, h + 1);
+            for (uint32_t h : half)
+                parts = std::max(parts, h + 1);
             if (parts >= 2) {
                 ++out.splits;
-                for (uint32_t p = parts; p-- > 0;) queue.emplace_front(ExtractChart(chart, half, p), depth + 1);
+                for (uint32_t p = parts; p-- > 0;)
+                    queue.emplace_front(ExtractChart(chart, half, p), depth + 1);
+                clock.Lap(kSegment);
                 continue;
             }
         }
@@ -207,24 +248,29 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
 
         ChartTile tile;
         tile.position = chart.position;
+        // The brick-wide normal, unless it is degenerate or the chart meets its neighbour
+        // at a crease (a box's edge): there each side keeps its own normal, as a smoothing
+        // angle would.
         tile.normal = VertexNormals(chart.position, chart.triangles);
-        // The brick-wide normal, unless the chart meets its neighbour at a crease (a box's
-        // edge): there each side keeps its own normal, as a smoothing angle would.
         for (size_t v = 0; v < tile.normal.size(); ++v) {
             const Vec3f shared = normal_of(chart.vertex_id[v], tile.normal[v]);
-            if (Dot(shared, tile.normal[v]) >= kCreaseCos) tile.normal[v] = shared;
+            if (Dot(shared, tile.normal[v]) >= kCreaseCos)
+                tile.normal[v] = shared;
         }
         tile.uv = param.uv;
-        if (!chart.albedo.empty()) tile.color = chart.albedo;
+        if (!chart.albedo.empty())
+            tile.color = chart.albedo;
         tile.vertex_id = chart.vertex_id;
         tile.triangles = chart.triangles;
         tile.face_id = chart.face_id;
         tile.material = chart.material;
         int grid_res = DefaultGridResolution(chart.triangles.size());
         tile.grid = BuildChartGrid(tile.uv, tile.triangles, grid_res);
+        clock.Lap(kGrid);
         const uint32_t res = ResolutionFor(param.scale, opt);
         tile.geometry = SampleGeometry(chart, param, tile.grid, tile.normal,
                                        std::min(res, opt.max_geometry_resolution));
+        clock.Lap(kGeometry);
 
         ChartMeta& m = tile.meta;
         m.brick = brick;
@@ -248,6 +294,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         std::snprintf(name, sizeof(name), "/tiles/b%05u-%05zu.tile", brick, out.tile_files.size());
         std::string path = dir + name;
         WriteTile(path, tile);
+        clock.Lap(kWrite);
         out.tile_files.push_back(path);
         ChartRecord rec;
         rec.brick = brick;

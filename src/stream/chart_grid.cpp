@@ -164,9 +164,16 @@ public:
     }
 
     // Index (into the outline list) of the triangle nearest to u; lowest index on ties.
-    uint32_t Nearest(const Vec2d& u) {
+    // `hint` (an outline index or kNoTriangle), e.g. the previous cell's answer, only
+    // tightens the search bound: equally near triangles are still visited, so the
+    // answer does not depend on it.
+    uint32_t Nearest(const Vec2d& u, uint32_t hint = kNoTriangle) {
         uint32_t best = kNoTriangle;
         double best_d2 = INFINITY;
+        if (hint != kNoTriangle) {
+            best = hint;
+            best_d2 = ClosestPoint(tris_[hint], u).dist2;
+        }
         std::vector<uint32_t>& stack = stack_;  // reused: no allocation per query
         stack.assign(1, 0);
         while (!stack.empty()) {
@@ -205,7 +212,8 @@ public:
                 continue;
             if (node.count > 0) {
                 for (uint32_t i = node.first; i < node.first + node.count; ++i)
-                    if (TriBoxDist2(tris_[prims_[i]], b) <= r2)
+                    if (BoxBoxDist2(b, boxes_[prims_[i]]) <= r2 &&  // a lower bound, cheap
+                        TriBoxDist2(tris_[prims_[i]], b) <= r2)
                         out->push_back(prims_[i]);
                 continue;
             }
@@ -279,14 +287,10 @@ struct LocateResult {
     double dist2 = 0;
 };
 
-LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
-    LocateResult r;
-    if (g.triangles.empty())
-        return r;
-    const Vec2d u(std::clamp(double(u_in.x), 0.0, 1.0), std::clamp(double(u_in.y), 0.0, 1.0));
-    const int res = g.resolution;
-    const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
-    const size_t cell = size_t(iy) * res + ix;
+// The real part of the query: true (and r filled) when u lies in a triangle of its cell,
+// or within kInsideDistance of one.
+bool LocateInside(const ChartGrid& g, const Vec2d& u, size_t cell, LocateResult* out) {
+    LocateResult& r = *out;
     for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
         double b[3];
         if (!Barycentric(TriangleAt(g, g.cell_tris[i]), u, b))
@@ -297,7 +301,7 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
         std::copy(b, b + 3, r.b);
         r.real = true;
         r.nearest = u;
-        return r;
+        return true;
     }
     // Within float resolution of a triangle (e.g. a rounded point of a boundary edge):
     // real, at the closest point.
@@ -311,10 +315,29 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
             r.real = true;
         }
     }
-    if (r.real) {
+    if (r.real)
         r.nearest = u;
+    return r.real;
+}
+
+size_t CellOf(const ChartGrid& g, const Vec2d& u) {
+    const int res = g.resolution;
+    const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
+    return size_t(iy) * res + ix;
+}
+
+Vec2d ClampToSquare(Vec2f u) {
+    return Vec2d(std::clamp(double(u.x), 0.0, 1.0), std::clamp(double(u.y), 0.0, 1.0));
+}
+
+LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
+    LocateResult r;
+    if (g.triangles.empty())
         return r;
-    }
+    const Vec2d u = ClampToSquare(u_in);
+    const size_t cell = CellOf(g, u);
+    if (LocateInside(g, u, cell, &r))
+        return r;
     // Virtual. A cell without candidates is inside the chart, so only rounding brings u
     // here: fall back to all outline triangles, which is exact too.
     const uint32_t* begin = g.near_tris.data() + g.near_start[cell];
@@ -454,6 +477,7 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
 
     g.near_start.assign(cell_count + 1, 0);
     std::vector<uint32_t> found;
+    uint32_t previous_nearest = kNoTriangle;
     for (size_t c = 0; c < cell_count; ++c) {
         g.near_start[c + 1] = g.near_start[c];
         if (tri_count == 0)
@@ -474,7 +498,8 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
         if (!touches_outline && centre_inside)
             continue;
 
-        const uint32_t nearest = bvh.Nearest(centre);
+        const uint32_t nearest = bvh.Nearest(centre, previous_nearest);
+        previous_nearest = nearest;
         double ub2 = 0;
         const Vec2d corners[4] = {box.lo, {box.hi.x, box.lo.y}, box.hi, {box.lo.x, box.hi.y}};
         for (const Vec2d& corner : corners)
@@ -502,6 +527,14 @@ GridLocation ChartGrid::Locate(Vec2f u) const {
     out.nearest_uv = Vec2f(float(r.nearest.x), float(r.nearest.y));
     out.distance = float(std::sqrt(r.dist2));
     return out;
+}
+
+uint32_t ChartGrid::InsideTriangle(Vec2f u_in) const {
+    if (triangles.empty())
+        return kNoTriangle;
+    const Vec2d u = ClampToSquare(u_in);
+    LocateResult r;
+    return LocateInside(*this, u, CellOf(*this, u), &r) ? r.triangle : kNoTriangle;
 }
 
 size_t ChartGrid::MemoryBytes() const {

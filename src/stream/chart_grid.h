@@ -47,6 +47,9 @@ struct ChartGrid {
     // float ulps) of a triangle counts as inside it. Among overlapping triangles (a
     // non-injective map) and among equally near ones, the lowest index wins.
     GridLocation Locate(Vec2f u) const;
+    // Locate(u).triangle when Locate(u).real, else kNoTriangle, without the nearest-triangle
+    // search of the virtual part.
+    uint32_t InsideTriangle(Vec2f u) const;
 
     size_t MemoryBytes() const;
 };

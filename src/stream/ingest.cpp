@@ -1,11 +1,5 @@
 #include "stream/ingest.h"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cmath>
-#include <filesystem>
-
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -16,6 +10,12 @@
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
 #include "stream/spill.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
 
 namespace mebake::stream {
 
@@ -32,11 +32,16 @@ double Since(Clock::time_point t) {
 // (OpenMesh, Eigen factorizations), measured with /usr/bin/time on the scans; the brick
 // size follows from it and the budget.
 constexpr uint64_t kBytesPerBrickTriangle = 2000;
+// Bricks processed at once (each also runs parallel loops inside). A constant, not the
+// thread count, so the brick layout and hence every tile's bytes do not depend on
+// --threads.
+constexpr int kBricksInFlight = 2;
 
 void PrepareDirectory(const IngestOptions& opt) {
     const std::string& dir = opt.out_dir;
     if (fs::exists(dir)) {
-        if (!fs::is_directory(dir)) UsageError("{} exists and is not a directory", dir);
+        if (!fs::is_directory(dir))
+            UsageError("{} exists and is not a directory", dir);
         if (!fs::is_empty(dir)) {
             if (!opt.force)
                 UsageError("{} exists and is not empty; pass --force to replace it", dir);
@@ -57,7 +62,8 @@ void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
         char name[48];
         std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
         std::string part = dir + name;
-        if (!fs::exists(part)) continue;
+        if (!fs::exists(part))
+            continue;
         io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
         auto pos = r.Read(io::Tag("PPOS"));
         auto tri = r.Read(io::Tag("PTRI"));
@@ -73,27 +79,32 @@ void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
 }  // namespace
 
 Manifest Ingest(const IngestOptions& opt) {
-    if (opt.inputs.empty()) UsageError("no input mesh");
+    if (opt.inputs.empty())
+        UsageError("no input mesh");
     if (std::count(opt.inputs.begin(), opt.inputs.end(), "-") > 1)
         UsageError("stdin ('-') can be read only once");
     PrepareDirectory(opt);
     const std::string& dir = opt.out_dir;
     ThreadLimit limit(opt.threads);
-    const int threads = MaxThreads();
     Manifest m;
     m.memory_budget = opt.memory;
     m.max_distortion = opt.max_distortion;
 
     // Pass 1: spill.
     auto t0 = Clock::now();
-    Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(96) << 20));
-    for (const auto& path : opt.inputs) {
-        auto in = io::InputStream::Open(path);
-        io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
-        spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
-        io::ReadMesh(*in, format, spill.BeginInput(path));
+    SpillResult sr;
+    {
+        // Scoped: the spill's page caches are freed before the passes that follow.
+        // Appends only: a few pages per file are enough to write in large blocks.
+        Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(12) << 20));
+        for (const auto& path : opt.inputs) {
+            auto in = io::InputStream::Open(path);
+            io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
+            spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
+            io::ReadMesh(*in, format, spill.BeginInput(path));
+        }
+        sr = spill.Finish();
     }
-    const SpillResult& sr = spill.Finish();
     for (const auto& in : sr.inputs) {
         InputRecord r;
         r.path = in.source;
@@ -112,60 +123,82 @@ Manifest Ingest(const IngestOptions& opt) {
     m.bbox_min = sr.bbox_min;
     m.bbox_max = sr.bbox_max;
     m.timings.emplace_back("spill", Since(t0));
-    if (sr.face_count == 0) InputError({opt.inputs[0]}, "the input has no faces to bake onto");
-    spdlog::info("spilled {} vertices, {} triangles in {}", FormatCount(double(sr.vertex_count)),
-                 FormatCount(double(sr.face_count)), FormatSeconds(Since(t0)));
+    if (sr.face_count == 0)
+        InputError({opt.inputs[0]}, "the input has no faces to bake onto");
+    spdlog::info("spilled {} vertices, {} triangles in {} (peak memory {})",
+                 FormatCount(double(sr.vertex_count)), FormatCount(double(sr.face_count)),
+                 FormatSeconds(Since(t0)), FormatBytes(PeakRssBytes()));
     m.state = "spilled";
 
     // Pass 2: bricks.
     auto t1 = Clock::now();
     BinOptions bopt;
-    bopt.max_faces = std::clamp<uint64_t>(opt.memory / (uint64_t(threads) * kBytesPerBrickTriangle),
-                                          20000, 400000);
-    bopt.cache_bytes = std::min<uint64_t>(opt.memory / 8, uint64_t(64) << 20);
+    bopt.max_faces = std::clamp<uint64_t>(
+        opt.memory / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
+    // Caches no larger than the files they cache (small meshes need little memory).
+    const uint64_t spilled_bytes = sr.vertex_count * 16 + sr.face_count * 16;
+    bopt.cache_bytes = std::min<uint64_t>(
+        {opt.memory / 8, uint64_t(64) << 20, 4 * spilled_bytes + (uint64_t(4) << 20)});
     BrickPlan plan = BinFaces(dir, sr, bopt);
     m.brick_faces = bopt.max_faces;
     m.brick_count = uint32_t(plan.bricks.size());
     m.surface_area = plan.surface_area;
     m.texel_size = opt.texel_size > 0
                        ? opt.texel_size
-                       : std::sqrt(plan.surface_area /
-                                   (0.5 * double(opt.lightmap_resolution) * opt.lightmap_resolution));
+                       : std::sqrt(plan.surface_area / (0.5 * double(opt.lightmap_resolution) *
+                                                        opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
-    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {}", plan.bricks.size(),
-                 FormatCount(double(bopt.max_faces)), m.texel_size, FormatSeconds(Since(t1)));
+    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
+                 plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
+                 FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
 
     // Pass 3: charts, bricks in parallel (each writes only its own files).
     auto t2 = Clock::now();
     ChartBuildOptions copt;
     copt.texel_size = m.texel_size;
     copt.max_distortion = opt.max_distortion;
-    copt.cache_bytes = std::max<uint64_t>(uint64_t(4) << 20, opt.memory / (16 * uint64_t(threads)));
+    // A brick reads its vertices in ascending id order, each page once: a few pages per
+    // file are enough, and a fixed size keeps peak memory independent of the mesh.
+    copt.cache_bytes = uint64_t(3) << 20;
     std::vector<BrickResult> results(plan.bricks.size());
     std::atomic<uint32_t> done{0};
     const bool tty = StderrIsTerminal();
-    ParallelFor(0, int64_t(plan.bricks.size()), [&](int64_t b) {
-        BrickResult r = BuildBrickCharts(dir, uint32_t(b), copt);
-        // The brick's visibility part goes to disk now, so memory does not accumulate.
-        {
-            char name[48];
-            std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", uint32_t(b));
-            io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
-            w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
-            w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
-            w.Finish();
-            std::vector<Vec3f>().swap(r.proxy_positions);
-            std::vector<uint32_t>().swap(r.proxy_triangles);
+    // kBricksInFlight workers take bricks in turn; each brick writes only its own files
+    // and result slot, so which worker runs it does not matter.
+    std::atomic<uint32_t> next{0};
+    std::atomic<bool> failed{false};
+    const uint32_t brick_count = uint32_t(plan.bricks.size());
+    ParallelFor(0, kBricksInFlight, [&](int64_t) {
+        for (uint32_t b = next++; b < brick_count && !failed; b = next++) {
+            try {
+                BrickResult r = BuildBrickCharts(dir, b, copt);
+                // The brick's visibility part goes to disk now, so memory does not accumulate.
+                char name[48];
+                std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
+                io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
+                w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
+                w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
+                w.Finish();
+                std::vector<Vec3f>().swap(r.proxy_positions);
+                std::vector<uint32_t>().swap(r.proxy_triangles);
+                results[b] = std::move(r);
+            } catch (...) {
+                failed = true;
+                throw;
+            }
+            uint32_t n = ++done;
+            if (tty)
+                std::fprintf(stderr, "\r  charts: brick %u/%u (%s)   ", n, brick_count,
+                             FormatSeconds(Since(t2)).c_str());
         }
-        results[size_t(b)] = std::move(r);
-        uint32_t n = ++done;
-        if (tty)
-            std::fprintf(stderr, "\r  charts: brick %u/%zu (%s)   ", n, plan.bricks.size(),
-                         FormatSeconds(Since(t2)).c_str());
     });
-    if (tty) std::fprintf(stderr, "\n");
+    if (tty)
+        std::fprintf(stderr, "\n");
     uint64_t splits = 0, holes = 0;
+    std::array<double, kChartStageNames.size()> stage_seconds{};
     for (auto& r : results) {
+        for (size_t k = 0; k < stage_seconds.size(); ++k)
+            stage_seconds[k] += r.stage_seconds[k];
         for (size_t k = 0; k < r.charts.size(); ++k) {
             uint32_t id = uint32_t(m.charts.size());
             fs::rename(r.tile_files[k], TilePath(dir, id));
@@ -175,8 +208,11 @@ Manifest Ingest(const IngestOptions& opt) {
         holes += r.repair.holes_filled;
     }
     m.timings.emplace_back("charts", Since(t2));
-    spdlog::info("{} charts ({} splits, {} holes filled) in {}", m.charts.size(), splits, holes,
-                 FormatSeconds(Since(t2)));
+    // Per-stage thread-seconds summed over the bricks (they overlap when threads > 1).
+    for (size_t k = 0; k < stage_seconds.size(); ++k)
+        m.timings.emplace_back(std::string("charts.") + kChartStageNames[k], stage_seconds[k]);
+    spdlog::info("{} charts ({} splits, {} holes filled) in {} (peak memory {})", m.charts.size(),
+                 splits, holes, FormatSeconds(Since(t2)), FormatBytes(PeakRssBytes()));
 
     // Pass 4: the visibility mesh.
     auto t3 = Clock::now();

@@ -88,15 +88,26 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     auto to = [&](uint32_t h) {
         return triangles[h / 3][(h % 3 + 1) % 3];
     };
-    std::vector<uint32_t> order(half_count);
-    std::iota(order.begin(), order.end(), 0u);
     auto key = [&](uint32_t h) {
         return (uint64_t(from(h)) << 32) | to(h);
     };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const uint64_t ka = key(a), kb = key(b);
-        return ka < kb || (ka == kb && a < b);
-    });
+    // Sorted by (key, h): a counting sort on `from` (stable, h ascending), then an
+    // insertion sort of each vertex's few outgoing half-edges by `to`.
+    std::vector<uint32_t> order(half_count);
+    std::vector<uint32_t> out_start(size_t(vertex_count) + 1, 0);
+    {
+        for (uint32_t h = 0; h < half_count; ++h)
+            ++out_start[from(h) + 1];
+        for (uint32_t v = 0; v < vertex_count; ++v)
+            out_start[v + 1] += out_start[v];
+        std::vector<uint32_t> fill(out_start.begin(), out_start.end() - 1);
+        for (uint32_t h = 0; h < half_count; ++h)
+            order[fill[from(h)]++] = h;
+        for (uint32_t v = 0; v < vertex_count; ++v)
+            for (uint32_t i = out_start[v] + 1; i < out_start[v + 1]; ++i)
+                for (uint32_t j = i; j > out_start[v] && to(order[j - 1]) > to(order[j]); --j)
+                    std::swap(order[j - 1], order[j]);
+    }
     for (uint32_t i = 1; i < half_count; ++i)
         if (key(order[i]) == key(order[i - 1]))
             return Fail(ParamStatus::kNonManifold,
@@ -106,9 +117,12 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     std::vector<uint32_t> twin(half_count, kNone);
     for (uint32_t h = 0; h < half_count; ++h) {
         const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
-        auto it = std::lower_bound(order.begin(), order.end(), want,
-                                   [&](uint32_t x, uint64_t k) { return key(x) < k; });
-        if (it != order.end() && key(*it) == want)
+        // Only the half-edges leaving to(h) can be its twin.
+        const auto first = order.begin() + out_start[to(h)];
+        const auto last = order.begin() + out_start[to(h) + 1];
+        auto it =
+            std::lower_bound(first, last, want, [&](uint32_t x, uint64_t k) { return key(x) < k; });
+        if (it != last && key(*it) == want)
             twin[h] = *it;
     }
 

@@ -53,6 +53,9 @@ constexpr double kDeviationQuantile = 0.95;
 // fold this sharply between neighbouring faces; the few noise spikes that do make charts
 // under min_chart_faces, which are merged back.
 constexpr double kCreaseDeg = 70;
+// Lloyd iterations stop early once at most 1 / kSettledFraction of the faces change chart
+// (late iterations on scans move 2-7% of the faces back and forth along the borders).
+constexpr size_t kSettledFraction = 64;
 
 struct Surface {
     const std::vector<Tri>& tris;
@@ -304,12 +307,24 @@ void FitAndReseed(const Surface& s, const Segmenter& seg, uint32_t min_faces,
 
 void Lloyd(const Surface& s, Segmenter& seg, int iterations, uint32_t min_faces, bool discs,
            std::vector<Proxy>& proxies, std::vector<uint32_t>& chart, SegmentReport& report) {
+    std::vector<uint32_t> previous;
     for (int it = 0; it < iterations; ++it) {
+        previous.swap(chart);
         seg.Partition(proxies, chart, discs);
         ++report.lloyd_iterations;
+        // Settled: so few faces moved that further passes would only shuffle the borders.
+        size_t moved = chart.size();
+        if (previous.size() == chart.size()) {
+            moved = 0;
+            for (size_t f = 0; f < chart.size(); ++f)
+                moved += previous[f] != chart[f];
+        }
+        const bool last = it + 1 == iterations || moved <= chart.size() / kSettledFraction;
         // Small charts are dropped between passes (their faces seed again if nobody takes
         // them), kept after the last.
-        FitAndReseed(s, seg, it + 1 < iterations ? min_faces : 1, proxies, chart);
+        FitAndReseed(s, seg, last ? 1 : min_faces, proxies, chart);
+        if (last)
+            break;
     }
 }
 
@@ -348,10 +363,17 @@ std::vector<uint32_t> FarthestSeeds(const Surface& s, const std::vector<uint32_t
         return best;
     };
     std::vector<uint32_t> seeds;
-    grow(faces[0]);
-    const uint32_t first = farthest();
-    for (uint32_t f : faces)
-        dist[f] = kInf;
+    // The first seed: the face farthest from faces[0] in a straight line (a full
+    // Dijkstra here cost as much as all the later, incremental ones together).
+    uint32_t first = faces[0];
+    double first_d2 = -1;
+    for (uint32_t f : faces) {
+        const Vec3d d = s.centroid[f] - s.centroid[faces[0]];
+        if (Dot(d, d) > first_d2) {
+            first_d2 = Dot(d, d);
+            first = f;
+        }
+    }
     seeds.push_back(first);
     grow(first);
     while (seeds.size() < std::min(k, faces.size())) {
@@ -546,6 +568,13 @@ TriMesh ExtractFaces(const TriMesh& mesh, const std::vector<uint32_t>& faces) {
             verts.push_back(v);
     std::sort(verts.begin(), verts.end());
     verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    // Local index of each used vertex through a per-thread scratch map (reset below),
+    // instead of a binary search per corner.
+    thread_local std::vector<uint32_t> local_of;
+    if (local_of.size() < mesh.vertex_count())
+        local_of.assign(mesh.vertex_count(), kNoIndex);
+    for (size_t i = 0; i < verts.size(); ++i)
+        local_of[verts[i]] = uint32_t(i);
     TriMesh out;
     out.position.reserve(verts.size());
     out.vertex_id.reserve(verts.size());
@@ -555,17 +584,16 @@ TriMesh ExtractFaces(const TriMesh& mesh, const std::vector<uint32_t>& faces) {
         if (!mesh.albedo.empty())
             out.albedo.push_back(mesh.albedo[v]);
     }
-    auto local = [&](uint32_t v) {
-        return uint32_t(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin());
-    };
     out.triangles.reserve(faces.size());
     for (uint32_t f : faces) {
         const Tri& t = mesh.triangles[f];
-        out.triangles.push_back({local(t[0]), local(t[1]), local(t[2])});
+        out.triangles.push_back({local_of[t[0]], local_of[t[1]], local_of[t[2]]});
         out.face_id.push_back(mesh.face_id.empty() ? f : mesh.face_id[f]);
         if (!mesh.material.empty())
             out.material.push_back(mesh.material[f]);
     }
+    for (uint32_t v : verts)
+        local_of[v] = kNoIndex;
     return out;
 }
 

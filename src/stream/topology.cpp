@@ -9,32 +9,53 @@
 namespace mebake::stream {
 
 EdgeGroups BuildEdgeGroups(const std::vector<std::array<uint32_t, 3>>& triangles) {
-    struct Key {
-        uint64_t edge;
-        uint32_t halfedge;
-    };
+    // Half-edges sorted by (min vertex, max vertex, half-edge id): a counting sort on the
+    // min vertex (filled in id order, so stable), then an insertion sort of each vertex's
+    // few half-edges by max vertex. Linear, and the same order as a comparison sort.
     const size_t n = triangles.size() * 3;
     CHECK_LT(n, size_t(kNoIndex));
-    std::vector<Key> keys(n);
-    for (size_t f = 0; f < triangles.size(); ++f) {
-        const auto& t = triangles[f];
-        for (int k = 0; k < 3; ++k) {
-            uint32_t a = t[k], b = t[(k + 1) % 3];
-            if (a > b)
-                std::swap(a, b);
-            keys[3 * f + k] = {(uint64_t(a) << 32) | b, uint32_t(3 * f + k)};
-        }
-    }
-    std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-        return x.edge != y.edge ? x.edge < y.edge : x.halfedge < y.halfedge;
-    });
+    uint32_t vertex_end = 0;
+    for (const auto& t : triangles)
+        vertex_end = std::max({vertex_end, t[0] + 1, t[1] + 1, t[2] + 1});
+    auto ends = [&](uint32_t h) {
+        const auto& t = triangles[h / 3];
+        const uint32_t a = t[h % 3], b = t[(h % 3 + 1) % 3];
+        return std::pair<uint32_t, uint32_t>(std::min(a, b), std::max(a, b));
+    };
+    std::vector<uint32_t> start(size_t(vertex_end) + 1, 0);
+    for (uint32_t h = 0; h < n; ++h)
+        ++start[ends(h).first + 1];
+    for (size_t v = 0; v < vertex_end; ++v)
+        start[v + 1] += start[v];
     EdgeGroups groups;
     groups.halfedge.resize(n);
+    std::vector<uint32_t> other(n);  // the max vertex of each sorted half-edge
+    {
+        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t h = 0; h < n; ++h) {
+            const auto [a, b] = ends(h);
+            other[fill[a]] = b;
+            groups.halfedge[fill[a]++] = h;
+        }
+    }
+    for (size_t v = 0; v < vertex_end; ++v) {
+        for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i) {
+            const uint32_t b = other[i], h = groups.halfedge[i];
+            uint32_t j = i;
+            for (; j > start[v] && other[j - 1] > b; --j) {
+                other[j] = other[j - 1];
+                groups.halfedge[j] = groups.halfedge[j - 1];
+            }
+            other[j] = b;
+            groups.halfedge[j] = h;
+        }
+    }
     groups.start.reserve(n / 2 + 2);
     for (size_t i = 0; i < n; ++i) {
-        if (i == 0 || keys[i].edge != keys[i - 1].edge)
+        const bool same = i > 0 && other[i] == other[i - 1] &&
+                          ends(groups.halfedge[i]).first == ends(groups.halfedge[i - 1]).first;
+        if (!same)
             groups.start.push_back(uint32_t(i));
-        groups.halfedge[i] = keys[i].halfedge;
     }
     groups.start.push_back(uint32_t(n));
     return groups;

@@ -343,3 +343,36 @@ TEST(ChartGridEvaluate, VertexNormalsOfACap) {
 
 }  // namespace
 }  // namespace mebake::stream
+
+namespace mebake::stream {
+namespace {
+
+TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
+    // Random points over the whole square, and points on the chart's edges and vertices
+    // (the tolerance band): InsideTriangle is Locate's answer for real points, none else.
+    const TriMesh m = GridPatch(33, 5, Cap, [](int i, int j) { return !(i > 10 && j < 8); });
+    const ChartParam p = ParameterizeChart(m);
+    ASSERT_TRUE(HasUv(p.status)) << p.message;
+    const ChartGrid grid =
+        BuildChartGrid(p.uv, m.triangles, DefaultGridResolution(m.triangle_count()));
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-0.01f, 1.01f);
+    std::vector<Vec2f> points;
+    for (int k = 0; k < 20000; ++k)
+        points.push_back(Vec2f(u(rng), u(rng)));
+    for (const Vec2f& q : p.uv)
+        points.push_back(q);
+    size_t real = 0;
+    for (const Vec2f& q : points) {
+        const GridLocation loc = grid.Locate(q);
+        const uint32_t inside = grid.InsideTriangle(q);
+        EXPECT_EQ(inside, loc.real ? loc.triangle : kNoTriangle) << q.x << " " << q.y;
+        real += loc.real;
+    }
+    EXPECT_GT(real, 5000u);
+    EXPECT_LT(real, points.size());
+    EXPECT_EQ(ChartGrid{}.InsideTriangle(Vec2f(0.5f, 0.5f)), kNoTriangle);
+}
+
+}  // namespace
+}  // namespace mebake::stream

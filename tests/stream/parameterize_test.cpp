@@ -2,6 +2,7 @@
 
 #include "core/parallel.h"
 #include "stream/arap.h"
+#include "stream/chart_builder.h"
 #include "stream/square_fit.h"
 
 #include <gtest/gtest.h>
@@ -565,6 +566,41 @@ TEST(SquareFit, ConvexHullDropsInteriorAndCollinearPoints) {
     EXPECT_EQ(hull[1], Vec2d(2, 0));
     EXPECT_EQ(hull[2], Vec2d(2, 2));
     EXPECT_EQ(hull[3], Vec2d(0, 2));
+}
+
+}  // namespace
+}  // namespace mebake::stream
+
+namespace mebake::stream {
+namespace {
+
+// Ingest runs fewer refinement iterations than the defaults (ChartBuildOptions): the
+// developable patches must still map with ~zero area and angle distortion and the caps
+// within the bounds the defaults are held to (a little looser on the 60-degree cap).
+TEST(ParameterizeChart, IngestIterationCountKeepsTheBounds) {
+    ParamOptions o;
+    o.refine_options.max_iterations = ChartBuildOptions{}.refine_iterations;
+    const TriMesh plane = GridPatch(33, 1, Plane);
+    const TriMesh cylinder = GridPatch(33, 2, QuarterCylinder);
+    for (const TriMesh* m : {&plane, &cylinder}) {
+        const ChartParam p = ParameterizeChart(*m, o);
+        Print(m == &plane ? "plane ingest" : "cylinder ingest", p);
+        ASSERT_EQ(p.status, ParamStatus::kOk) << p.message;
+        ExpectValid(*m, p);
+        EXPECT_LT(p.metrics.jacobian_deviation_mean, 1e-3);
+        EXPECT_LT(p.metrics.conformal_mean - 1, 1e-3);
+        EXPECT_LT(EdgeLengthError(*m, p), 1e-2);
+    }
+    for (const double degrees : {30.0, 60.0}) {
+        const TriMesh m = GridPatch(41, 3, SphereCap(degrees * kPi / 180), 0.2);
+        const ChartParam p = ParameterizeChart(m, o);
+        Print(degrees < 45 ? "cap 30 ingest" : "cap 60 ingest", p);
+        ExpectValid(m, p);
+        EXPECT_EQ(p.status, ParamStatus::kOk);
+        EXPECT_LT(p.metrics.jacobian_deviation_mean, 0.008);
+        EXPECT_LT(p.metrics.jacobian_deviation_coarse, 0.002);
+        EXPECT_LT(p.metrics.conformal_mean, degrees < 45 ? 1.06 : 1.2);
+    }
 }
 
 }  // namespace
