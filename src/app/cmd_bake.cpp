@@ -6,12 +6,15 @@
 #include <filesystem>
 #include <fstream>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include "app/commands.h"
 #include "app/export_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/units.h"
+#include "io/byte_stream.h"
+#include "io/mesh_format.h"
 #include "solve/solve_job.h"
 #include "stream/bake_dir.h"
 #include "stream/ingest.h"
@@ -25,9 +28,70 @@ uint64_t ParseMemory(const std::string& text) {
     if (*bytes < (uint64_t(64) << 20)) UsageError("--memory {}: at least 64M is needed", text);
     return *bytes;
 }
+
+bool IsRegularFile(const std::string& path) {
+    struct stat st {};
+    return path != "-" && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// The ingest options that decide the tiles, as the manifest records them.
+std::vector<std::pair<std::string, std::string>> IngestOptionsRecord(const IngestCommand& c) {
+    return {{"format", c.format ? std::string(io::FormatName(*c.format)) : std::string()},
+            {"lightmap_resolution", std::to_string(c.lightmap_resolution)},
+            {"max_distortion", fmt::format("{:.17g}", c.max_distortion)},
+            {"memory", std::to_string(ParseMemory(c.memory))},
+            {"texel_size", fmt::format("{:.17g}", c.texel_size)}};
+}
+
+// The reason a finished ingest in `dir` cannot be reused for `c`, or "" when it can.
+// Throws Error(Usage) when an input or an option changed: never mixed silently.
+std::string CheckIngestReusable(const std::string& dir, const IngestCommand& c) {
+    if (!stream::IsBakeDirectory(dir)) return "ingest did not finish";
+    stream::Manifest m = stream::ReadManifest(dir);
+    if (m.state != "ingested") return "ingest did not finish (state '" + m.state + "')";
+    if (m.options.empty()) return "the bake directory does not record its options";
+    if (m.inputs.size() != c.inputs.size())
+        UsageError("{} was ingested from {} inputs, not {}; pass --force to start over", dir,
+                   m.inputs.size(), c.inputs.size());
+    for (size_t k = 0; k < c.inputs.size(); ++k) {
+        const auto& rec = m.inputs[k];
+        const std::string& path = c.inputs[k];
+        if (path == "-") return "stdin cannot be verified without reading it again";
+        if (rec.path != path)
+            UsageError("input {} was {} when {} was ingested; pass --force to start over", k + 1,
+                       rec.path, dir);
+        if (!rec.hashed) return path + " cannot be verified (stdin, or not recorded)";
+        if (!IsRegularFile(path)) return path + " is not a regular file any more";
+        uint64_t size = 0;
+        uint32_t crc = 0;
+        stream::HashFile(path, &size, &crc);
+        if (size != rec.file_size || crc != rec.crc32)
+            UsageError("{} changed since it was ingested into {} (size {} -> {}, CRC-32 {:08x} -> "
+                       "{:08x}); pass --force to start over with the new input",
+                       path, dir, rec.file_size, size, rec.crc32, crc);
+    }
+    const auto want = IngestOptionsRecord(c);
+    for (const auto& [key, value] : want) {
+        auto it = std::find_if(m.options.begin(), m.options.end(),
+                               [&](const auto& kv) { return kv.first == key; });
+        const std::string had = it == m.options.end() ? "(none)" : it->second;
+        if (had != value)
+            UsageError("{} was ingested with {} {}, this run asks for {}; pass --force to start "
+                       "over",
+                       dir, key, had, value);
+    }
+    return "";
+}
 }  // namespace
 
 int RunIngest(const IngestCommand& c) {
+    // Identities of the file inputs, taken before they are read, for resume checks.
+    std::vector<stream::InputRecord> ids(c.inputs.size());
+    for (size_t k = 0; k < c.inputs.size(); ++k)
+        if (IsRegularFile(c.inputs[k])) {
+            stream::HashFile(c.inputs[k], &ids[k].file_size, &ids[k].crc32);
+            ids[k].hashed = true;
+        }
     stream::IngestOptions opt;
     opt.inputs = c.inputs;
     opt.format = c.format;
@@ -39,6 +103,15 @@ int RunIngest(const IngestCommand& c) {
     opt.max_distortion = c.max_distortion;
     opt.force = c.force;
     auto m = stream::Ingest(opt);
+    // A second manifest write adds what resume needs; killed before it, the directory
+    // is taken as not ingested and ingest starts over.
+    for (size_t k = 0; k < m.inputs.size() && k < ids.size(); ++k) {
+        m.inputs[k].hashed = ids[k].hashed;
+        m.inputs[k].file_size = ids[k].file_size;
+        m.inputs[k].crc32 = ids[k].crc32;
+    }
+    m.options = IngestOptionsRecord(c);
+    stream::WriteManifest(c.output, m);
     spdlog::info("wrote {} ({} charts); peak memory {}", c.output, m.charts.size(),
                  FormatBytes(PeakRssBytes()));
     return 0;
@@ -56,7 +129,11 @@ int RunSolve(const SolveCommand& c) {
     opt.memory = ParseMemory(c.memory);
     opt.radiosity = c.unknown == "radiosity";
     opt.stats_file = c.stats_file;
-    solve::RunSolveJob(opt);
+    opt.checkpoint_interval = c.checkpoint_interval;
+    opt.resume = c.resume;
+    opt.force = c.force;
+    auto st = solve::RunSolveJob(opt);
+    if (st.stop_reason == "already solved") return 0;
     spdlog::info("wrote {}/solve/solution.bin; peak memory {}", c.dir, FormatBytes(PeakRssBytes()));
     return 0;
 }
@@ -65,36 +142,62 @@ int RunBake(const BakeCommand& c) {
     namespace fs = std::filesystem;
     const bool to_stdout = c.output == "-";
     std::string out_dir = c.output;
+    // A directory a bake has written to: it resumes there (docs/resume.md).
+    const std::string marker = out_dir + "/.mebake-bake";
+    const std::string dir = out_dir + "/scene.mebake";
+    bool resuming = false;
     if (to_stdout) {
         char tmpl[] = "/tmp/mebake-bake-XXXXXX";
         if (!::mkdtemp(tmpl)) IoError({"/tmp"}, "cannot create a temporary directory");
         out_dir = tmpl;
     } else if (fs::exists(out_dir) && !fs::is_empty(out_dir) && !c.force) {
-        UsageError("{} exists and is not empty; pass --force to replace its outputs", out_dir);
+        if (!fs::exists(marker) && !stream::IsBakeDirectory(dir))
+            UsageError("{} exists, is not empty and is not the output of `mebake bake`; pass "
+                       "--force to replace its outputs",
+                       out_dir);
+        resuming = true;
     }
     fs::create_directories(out_dir);
-    const std::string dir = out_dir + "/scene.mebake";
+    if (!to_stdout && !fs::exists(marker)) {
+        auto out = io::OutputStream::Open(marker);
+        out->Write("mebake bake output directory: rerunning the same command resumes here\n");
+        out->Commit();
+    }
 
     IngestCommand ing;
     ing.inputs = c.inputs;
     ing.format = c.format;
-    ing.output = dir;
+    ing.output = to_stdout ? out_dir + "/scene.mebake" : dir;
     ing.memory = c.memory;
     ing.threads = c.threads;
     ing.lightmap_resolution = c.lightmap_resolution;
     ing.force = true;
-    RunIngest(ing);
+    std::string reason = resuming ? CheckIngestReusable(dir, ing) : "new";
+    if (reason.empty()) {
+        spdlog::info("resuming in {}: ingest is done, inputs and options unchanged", out_dir);
+    } else {
+        if (resuming) spdlog::info("resuming in {}: {}; ingest starts over", out_dir, reason);
+        // An ingest killed before its first manifest leaves no manifest: Ingest() refuses
+        // to delete such a directory, but it is ours.
+        if (!to_stdout && fs::exists(dir) && !stream::IsBakeDirectory(dir)) fs::remove_all(dir);
+        RunIngest(ing);
+    }
 
     SolveCommand sol;
-    sol.dir = dir;
+    sol.dir = ing.output;
     sol.scene_file = c.scene_file;
     sol.order = c.order;
+    sol.tolerance = c.tolerance;
+    sol.max_bounces = c.max_bounces;
     sol.threads = c.threads;
     sol.memory = c.memory;
+    sol.checkpoint_interval = c.checkpoint_interval;
+    sol.resume = true;
+    sol.force = c.force;
     RunSolve(sol);
 
     ExportCommand exp;
-    exp.dir = dir;
+    exp.dir = ing.output;
     exp.threads = c.threads;
     exp.force = true;
     if (to_stdout) {
@@ -114,7 +217,7 @@ int RunBake(const BakeCommand& c) {
     RunExport(png);
 
     RenderCommand ren;
-    ren.dir = dir;
+    ren.dir = ing.output;
     ren.output = out_dir + "/render.png";
     ren.threads = c.threads;
     ren.force = true;

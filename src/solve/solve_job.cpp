@@ -2,16 +2,22 @@
 
 #include <nlohmann/json.hpp>
 
+#include <signal.h>
+
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
+#include "core/checksum.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
+#include "solve/checkpoint.h"
 #include "solve/polygon_light.h"
 #include "solve/solution.h"
 #include "solve/visibility.h"
@@ -39,6 +45,50 @@ void LoadProxy(const std::string& dir, VisibilityScene& vis) {
     vis.Commit();
 }
 
+// SIGINT / SIGTERM during the solve: the handler only sets the flag; the solver stops at
+// the next batch boundary (or skips the rest of the direct pass) and a checkpoint is
+// written. SA_RESETHAND: a second signal kills at once.
+std::atomic<bool> g_stop{false};
+extern "C" void OnStopSignal(int) { g_stop.store(true); }
+
+class StopSignals {
+public:
+    StopSignals() {
+        g_stop.store(false);
+        struct sigaction sa {};
+        sa.sa_handler = OnStopSignal;
+        sa.sa_flags = SA_RESETHAND;
+        sigemptyset(&sa.sa_mask);
+        ::sigaction(SIGINT, &sa, &old_int_);
+        ::sigaction(SIGTERM, &sa, &old_term_);
+    }
+    ~StopSignals() {
+        ::sigaction(SIGINT, &old_int_, nullptr);
+        ::sigaction(SIGTERM, &old_term_, nullptr);
+    }
+
+private:
+    struct sigaction old_int_ {}, old_term_ {};
+};
+
+// Canonical text of everything besides the tiles that the solution depends on.
+std::string SettingsText(const Scene& scene, const std::string& scene_file) {
+    const SolverSettings& s = scene.solver;
+    std::string scene_hash = "default";
+    if (!scene_file.empty()) {
+        std::ifstream f(scene_file, std::ios::binary);
+        std::stringstream text;
+        text << f.rdbuf();
+        const std::string bytes = text.str();
+        scene_hash = fmt::format("{:08x}", Crc32(bytes.data(), bytes.size()));
+    }
+    return fmt::format(
+        "checkpoint {} order {} tolerance {:.17g} bounces {} stop {:.17g} time {:.17g} sky {} "
+        "light {} radiosity {} scene {}",
+        kCheckpointVersion, s.order, s.tolerance, s.max_bounces, s.stop_fraction, s.time_limit,
+        s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash);
+}
+
 }  // namespace
 
 SolveStats RunSolveJob(const SolveJobOptions& opt) {
@@ -56,6 +106,27 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     if (opt.time_limit > 0) scene.solver.time_limit = opt.time_limit;
     scene.solver.radiosity = opt.radiosity;
     spdlog::info("scene: {}", scene.description);
+
+    // What a checkpoint or a finished solution must have been made from to be reused.
+    const uint64_t key = SolveKey(opt.dir, m.charts.size(), SettingsText(scene, opt.scene_file));
+    fs::create_directories(opt.dir + "/solve");
+    if (opt.force) {
+        RemoveCheckpoints(opt.dir);
+    } else if (HasCheckpoint(opt.dir) && !opt.resume) {
+        UsageError("{} holds the checkpoint of an interrupted solve; pass --resume to continue "
+                   "it, or --force to start over",
+                   opt.dir);
+    } else if (opt.resume && !HasCheckpoint(opt.dir) && fs::exists(SolutionPath(opt.dir))) {
+        const uint64_t had = ReadSolutionKey(SolutionPath(opt.dir));
+        if (had != key)
+            UsageError("{} was solved from other tiles or settings (order, tolerance, bounces, "
+                       "scene); pass --force to solve again",
+                       SolutionPath(opt.dir));
+        spdlog::info("{} is already solved with these settings; kept", opt.dir);
+        SolveStats done;
+        done.stop_reason = "already solved";
+        return done;
+    }
 
     // Charts' geometry images (in memory for now; a tile cache will bound this).
     std::vector<SolveChart> charts(m.charts.size());
@@ -108,6 +179,34 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                  so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
 
     Solver solver(scene, charts, vis, so);
+    if (opt.resume && !opt.force) {
+        auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
+                                 charts.size());
+        if (cp) {
+            spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
+            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        }
+    }
+    StopSignals signals;
+    solver.SetStopFlag(&g_stop);
+    uint64_t checkpoints = 0, checkpoint_bytes = 0;
+    double checkpoint_seconds = 0;
+    auto last_checkpoint = Clock::now();
+    solver.SetBatchHook([&](int next_batch) {
+        const bool stop = g_stop.load();
+        const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
+        if (stop || (opt.checkpoint_interval >= 0 && since >= opt.checkpoint_interval)) {
+            const auto t = Clock::now();
+            checkpoint_bytes = WriteCheckpoint(opt.dir, solver, key);
+            last_checkpoint = Clock::now();
+            const double secs = std::chrono::duration<double>(last_checkpoint - t).count();
+            checkpoint_seconds += secs;
+            ++checkpoints;
+            spdlog::debug("checkpoint before batch {}: {} in {}", next_batch,
+                          FormatBytes(checkpoint_bytes), FormatSeconds(secs));
+        }
+        return !stop;
+    });
     const bool tty = StderrIsTerminal();
     auto t_run = Clock::now();
     solver.Run([&](int batch, double unshot, uint64_t rays) {
@@ -119,16 +218,26 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     });
     if (tty) std::fprintf(stderr, "\n");
     const SolveStats& st = solver.stats();
+    if (st.stop_reason == "interrupted") {
+        if (solver.next_batch() < 0)
+            throw Error(ErrorKind::Cancelled,
+                        fmt::format("interrupted during the direct pass, before the first "
+                                    "checkpoint; run `mebake solve --resume {}` to solve again",
+                                    opt.dir));
+        throw Error(ErrorKind::Cancelled,
+                    fmt::format("interrupted; the solve is saved in {} (next batch {}); continue "
+                                "with `mebake solve --resume {}` or the same `mebake bake` command",
+                                CheckpointPath(opt.dir), solver.next_batch(), opt.dir));
+    }
     double total = std::chrono::duration<double>(Clock::now() - t0).count();
     spdlog::info("solved in {} ({} batches, {} rays, {} leaves, stop: {}, unshot {:.3g}%)",
                  FormatSeconds(total), st.batches, FormatCount(double(st.rays)),
                  FormatCount(double(st.leaves)), st.stop_reason,
                  st.emitted_power > 0 ? 100 * st.unshot_power / st.emitted_power : 0.0);
 
-    fs::create_directories(opt.dir + "/solve");
-    WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity);
     // Export and render shade with the same materials: keep the scene file beside the
-    // solution (without one, the inputs' materials and the default rig are rebuilt).
+    // solution (without one, the inputs' materials and the default rig are rebuilt). It
+    // and the statistics go first: solution.bin is the commit point of the solve.
     const std::string kept = opt.dir + "/solve/scene.json";
     if (!opt.scene_file.empty()) {
         fs::copy_file(opt.scene_file, kept + ".tmp", fs::copy_options::overwrite_existing);
@@ -156,6 +265,10 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["emitted_power"] = st.emitted_power;
     j["unshot_power"] = st.unshot_power;
     j["stop_reason"] = st.stop_reason;
+    j["checkpoints"] = {{"count", checkpoints},
+                        {"bytes", checkpoint_bytes},
+                        {"seconds", checkpoint_seconds},
+                        {"interval", opt.checkpoint_interval}};
     std::string text = j.dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
         if (path.empty()) continue;
@@ -163,6 +276,12 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         out->Write(text);
         out->Commit();
     }
+    WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity, key);
+    RemoveCheckpoints(opt.dir);
+    io::SyncDirectory(opt.dir + "/solve");
+    if (checkpoints)
+        spdlog::info("{} checkpoints of {} took {}", checkpoints, FormatBytes(checkpoint_bytes),
+                     FormatSeconds(checkpoint_seconds));
     return st;
 }
 

@@ -1,6 +1,10 @@
 // `mebake solve` as a library call: a bake directory in, solve/solution.bin and
 // solve/stats.json out. Loads the scene, the charts' geometry images and the visibility
 // mesh, turns small emissive surfaces into exact polygon lights, and runs the solver.
+// Checkpoints (checkpoint.h) are written every checkpoint_interval seconds at batch
+// boundaries and on SIGINT/SIGTERM (then Error(Cancelled): exit 130); `resume` continues
+// from the newest good one, or reuses a finished solution made from the same tiles and
+// settings (docs/resume.md).
 #pragma once
 
 #include <string>
@@ -20,6 +24,9 @@ struct SolveJobOptions {
     uint64_t memory = uint64_t(1) << 30;
     bool radiosity = false;
     std::string stats_file;       // extra copy of the statistics (JSON)
+    double checkpoint_interval = 30;  // seconds; 0: at every batch boundary; < 0: only on signals
+    bool resume = false;          // continue from a checkpoint / keep a matching solution
+    bool force = false;           // discard checkpoints and solve from the start
 };
 
 SolveStats RunSolveJob(const SolveJobOptions& opt);

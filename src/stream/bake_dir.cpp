@@ -2,9 +2,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
+#include "core/checksum.h"
 #include "core/error.h"
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
@@ -42,10 +48,18 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
                                {"triangles", in.triangles}, {"first_vertex", in.first_vertex},
                                {"first_face", in.first_face}, {"has_colors", in.has_colors},
                                {"materials", in.materials}, {"mtllibs", in.mtllibs}});
+    for (size_t k = 0; k < m.inputs.size(); ++k)
+        if (m.inputs[k].hashed)
+            j["inputs"][k]["identity"] = {{"size", m.inputs[k].file_size},
+                                          {"crc32", m.inputs[k].crc32}};
     j["settings"] = {{"texel_size", m.texel_size},
                      {"brick_faces", m.brick_faces},
                      {"max_distortion", m.max_distortion},
                      {"memory_budget", m.memory_budget}};
+    if (!m.options.empty()) {
+        j["options"] = json::object();
+        for (const auto& [k, v] : m.options) j["options"][k] = v;
+    }
     j["vertex_count"] = m.vertex_count;
     j["face_count"] = m.face_count;
     j["bbox"] = {Vec(m.bbox_min), Vec(m.bbox_max)};
@@ -93,6 +107,11 @@ Manifest ReadManifest(const std::string& dir) {
             r.has_colors = in.at("has_colors");
             r.materials = in.at("materials").get<std::vector<std::string>>();
             r.mtllibs = in.at("mtllibs").get<std::vector<std::string>>();
+            if (in.contains("identity")) {
+                r.hashed = true;
+                r.file_size = in.at("identity").at("size");
+                r.crc32 = in.at("identity").at("crc32");
+            }
             m.inputs.push_back(r);
         }
         const auto& s = j.at("settings");
@@ -100,6 +119,9 @@ Manifest ReadManifest(const std::string& dir) {
         m.brick_faces = s.at("brick_faces");
         m.max_distortion = s.at("max_distortion");
         m.memory_budget = s.at("memory_budget");
+        if (j.contains("options"))
+            for (const auto& [k, v] : j.at("options").items())
+                m.options.emplace_back(k, v.get<std::string>());
         m.vertex_count = j.at("vertex_count");
         m.face_count = j.at("face_count");
         m.bbox_min = ToVec3d(j.at("bbox").at(0));
@@ -127,6 +149,30 @@ Manifest ReadManifest(const std::string& dir) {
         CorruptError({path}, "malformed manifest: {}", e.what());
     }
     return m;
+}
+
+void HashFile(const std::string& path, uint64_t* size, uint32_t* crc32) {
+    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) IoError({path}, "cannot open: {}", ErrnoString(errno));
+    ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+    std::vector<uint8_t> buf(size_t(4) << 20);
+    uint64_t total = 0;
+    uint32_t crc = 0;
+    for (;;) {
+        ssize_t n = ::read(fd, buf.data(), buf.size());
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            int err = errno;
+            ::close(fd);
+            IoError({path, total}, "read failed: {}", ErrnoString(err));
+        }
+        if (n == 0) break;
+        crc = Crc32(buf.data(), size_t(n), crc);
+        total += uint64_t(n);
+    }
+    ::close(fd);
+    *size = total;
+    *crc32 = crc;
 }
 
 }  // namespace mebake::stream

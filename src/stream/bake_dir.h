@@ -9,8 +9,10 @@
 //   tiles/cNNNNNN.tile   one chart tile per chart (chunk_file "TILE")
 //   proxy.bin            the visibility mesh (chunk_file "PRXY")
 //
+//   solve/               the solver's outputs and checkpoints (solve/checkpoint.h)
+//
 // The manifest is rewritten atomically (temp + fsync + rename) after each stage, so
-// it always describes files that are complete.
+// it always describes files that are complete. Resume rules: docs/resume.md.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +28,12 @@ constexpr int kManifestVersion = 1;
 struct InputRecord {
     std::string path;         // as given ("-" for stdin)
     uint64_t bytes = 0;       // bytes read
+    // Identity of a file input, so a resumed bake notices a changed input: its size and
+    // the CRC-32 of all its bytes (core/checksum.h). hashed = false: not recorded (stdin,
+    // or a directory ingested before this was recorded).
+    bool hashed = false;
+    uint64_t file_size = 0;
+    uint32_t crc32 = 0;
     uint64_t vertices = 0, triangles = 0;
     uint64_t first_vertex = 0, first_face = 0;
     bool has_colors = false;
@@ -53,6 +61,9 @@ struct Manifest {
     uint64_t brick_faces = 0;
     double max_distortion = 0;
     uint64_t memory_budget = 0;
+    // The options it was ingested with as the user gave them ("lightmap_resolution",
+    // "texel_size", "max_distortion", "memory", "format"), compared on resume.
+    std::vector<std::pair<std::string, std::string>> options;
     // Counts.
     uint64_t vertex_count = 0, face_count = 0;
     Vec3d bbox_min{}, bbox_max{};
@@ -74,5 +85,8 @@ void WriteManifest(const std::string& dir, const Manifest& m);
 // Throws Error(Io) if missing, Error(Corrupt) naming the file if malformed.
 Manifest ReadManifest(const std::string& dir);
 bool IsBakeDirectory(const std::string& path);
+
+// Size and CRC-32 of a whole file, read sequentially. Throws Error(Io) naming it.
+void HashFile(const std::string& path, uint64_t* size, uint32_t* crc32);
 
 }  // namespace mebake::stream
