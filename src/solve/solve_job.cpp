@@ -49,7 +49,7 @@ void LoadProxy(const std::string& dir, VisibilityScene& vis) {
 // the next batch boundary (or skips the rest of the direct pass) and a checkpoint is
 // written. SA_RESETHAND: a second signal kills at once.
 std::atomic<bool> g_stop{false};
-extern "C" void OnStopSignal(int) { g_stop.store(true); }
+void OnStopSignal(int) { g_stop.store(true); }
 
 class StopSignals {
 public:
@@ -122,10 +122,16 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
             UsageError("{} was solved from other tiles or settings (order, tolerance, bounces, "
                        "scene); pass --force to solve again",
                        SolutionPath(opt.dir));
-        spdlog::info("{} is already solved with these settings; kept", opt.dir);
-        SolveStats done;
-        done.stop_reason = "already solved";
-        return done;
+        try {
+            ReadSolution(SolutionPath(opt.dir));  // every chunk's checksum
+            spdlog::info("{} is already solved with these settings; kept", opt.dir);
+            SolveStats done;
+            done.stop_reason = "already solved";
+            return done;
+        } catch (const Error& e) {
+            if (e.kind() != ErrorKind::Corrupt) throw;
+            spdlog::warn("{}; solving again", e.what());
+        }
     }
 
     // Charts' geometry images (in memory for now; a tile cache will bound this).
