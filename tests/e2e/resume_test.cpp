@@ -54,7 +54,7 @@ std::string ReadFile(const fs::path& p) {
 // Runs `cmd` (a shell command line, exec'ed so the pid is mebake's) with the environment
 // additions `env`; SIGKILLs it after `kill_after` seconds when that is positive, or
 // sends `sig` then. stderr is captured through a file.
-Result Run(const std::string& cmd, double kill_after = 0, const std::string& env = "",
+Result Exec(const std::string& cmd, double kill_after = 0, const std::string& env = "",
            int sig = SIGKILL) {
     static int counter = 0;
     const fs::path err =
@@ -188,7 +188,7 @@ TEST(Resume, KilledBakesEndByteIdentical) {
             const int stage = Stage(out);
             if (stage > k.stage)
                 continue;  // that stage is over
-            Result r = Run(BakeCommand(out, scan), k.delay, k.env);
+            Result r = Exec(BakeCommand(out, scan), k.delay, k.env);
             if (r.signal == SIGKILL) {
                 ++kills;
                 ++per_stage[stage];
@@ -200,7 +200,7 @@ TEST(Resume, KilledBakesEndByteIdentical) {
         }
         std::printf("kills: %d (ingest %d, solve %d, export %d; %d inside a checkpoint write)\n",
                     kills, per_stage[0], per_stage[1], per_stage[2], hook_kills);
-        Result last = Run(BakeCommand(out, scan));
+        Result last = Exec(BakeCommand(out, scan));
         ASSERT_EQ(last.code, 0) << last.err;
         EXPECT_GE(kills, 20);
         EXPECT_GE(per_stage[0], 3);
@@ -222,11 +222,11 @@ protected:
         if (!fs::exists(scan_))
             return;
         tmp_ = TempDir("damage");
-        Result r = Run(kBin + " ingest " + scan_ + " -o " + (tmp_ / "ingested").string() +
+        Result r = Exec(kBin + " ingest " + scan_ + " -o " + (tmp_ / "ingested").string() +
                        " --lightmap-resolution 128 --threads 2");
         ASSERT_EQ(r.code, 0) << r.err;
         fs::copy(tmp_ / "ingested", tmp_ / "ref", fs::copy_options::recursive);
-        r = Run(Solve(tmp_ / "ref"));
+        r = Exec(Solve(tmp_ / "ref"));
         ASSERT_EQ(r.code, 0) << r.err;
         reference_ = ReadFile(tmp_ / "ref/solve/solution.bin");
     }
@@ -248,7 +248,7 @@ protected:
         fs::path dir = tmp_ / name;
         fs::remove_all(dir);
         fs::copy(tmp_ / "ingested", dir, fs::copy_options::recursive);
-        Result r = Run(Solve(dir), 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=3");
+        Result r = Exec(Solve(dir), 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=3");
         EXPECT_EQ(r.signal, SIGKILL) << r.err;
         EXPECT_TRUE(fs::exists(dir / "solve/checkpoint.bin"));
         EXPECT_TRUE(fs::exists(dir / "solve/checkpoint.prev.bin"));
@@ -264,7 +264,7 @@ TEST_F(Damage, FlippedByteInATileIsNamed) {
     fs::copy(tmp_ / "ingested", dir, fs::copy_options::recursive);
     const fs::path tile = dir / "tiles/c000000.tile";
     FlipByte(tile, fs::file_size(tile) / 2);
-    Result r = Run(Solve(dir));
+    Result r = Exec(Solve(dir));
     EXPECT_EQ(r.code, 1) << r.err;
     EXPECT_NE(r.err.find("c000000.tile"), std::string::npos) << r.err;
 }
@@ -274,11 +274,11 @@ TEST_F(Damage, FlippedByteInTheSolutionIsNamed) {
     fs::copy(tmp_ / "ref", dir, fs::copy_options::recursive);
     const fs::path sol = dir / "solve/solution.bin";
     FlipByte(sol, fs::file_size(sol) / 2);
-    Result r = Run(kBin + " export " + dir.string() + " --lightmap " + (dir / "l.exr").string());
+    Result r = Exec(kBin + " export " + dir.string() + " --lightmap " + (dir / "l.exr").string());
     EXPECT_EQ(r.code, 1) << r.err;
     EXPECT_NE(r.err.find("solution.bin"), std::string::npos) << r.err;
     // A resumed solve does not take a damaged solution as done: it says so and solves again.
-    r = Run(Solve(dir, "--resume"));
+    r = Exec(Solve(dir, "--resume"));
     EXPECT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("solution.bin"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("solving again"), std::string::npos) << r.err;
@@ -287,10 +287,10 @@ TEST_F(Damage, FlippedByteInTheSolutionIsNamed) {
 
 TEST_F(Damage, ResumeAfterAKillInsideTheCheckpointWrite) {
     fs::path dir = Interrupted("resume");
-    Result r = Run(Solve(dir));
+    Result r = Exec(Solve(dir));
     EXPECT_EQ(r.code, 2) << "a solve without --resume must not discard the checkpoint";
     EXPECT_NE(r.err.find("--resume"), std::string::npos) << r.err;
-    r = Run(Solve(dir, "--resume"));
+    r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("resuming from"), std::string::npos) << r.err;
     EXPECT_TRUE(ReadFile(dir / "solve/solution.bin") == reference_);
@@ -301,7 +301,7 @@ TEST_F(Damage, FlippedByteInACheckpointFallsBack) {
     fs::path dir = Interrupted("flipped");
     const fs::path cp = dir / "solve/checkpoint.bin";
     FlipByte(cp, fs::file_size(cp) / 2);
-    Result r = Run(Solve(dir, "--resume"));
+    Result r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("checkpoint.bin"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("falling back to"), std::string::npos) << r.err;
@@ -313,7 +313,7 @@ TEST_F(Damage, TruncatedCheckpointFallsBack) {
     fs::path dir = Interrupted("truncated");
     const fs::path cp = dir / "solve/checkpoint.bin";
     fs::resize_file(cp, fs::file_size(cp) / 2);
-    Result r = Run(Solve(dir, "--resume"));
+    Result r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("falling back to"), std::string::npos) << r.err;
@@ -324,7 +324,7 @@ TEST_F(Damage, NoUsableCheckpointStartsOver) {
     fs::path dir = Interrupted("both");
     fs::resize_file(dir / "solve/checkpoint.bin", 10);
     FlipByte(dir / "solve/checkpoint.prev.bin", 3);
-    Result r = Run(Solve(dir, "--resume"));
+    Result r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("starts over"), std::string::npos) << r.err;
     EXPECT_TRUE(ReadFile(dir / "solve/solution.bin") == reference_);
@@ -334,13 +334,13 @@ TEST_F(Damage, InjectedWriteFailureKeepsThePreviousCheckpoint) {
     fs::path dir = Interrupted("diskfull");
     const std::string before = ReadFile(dir / "solve/checkpoint.bin");
     const std::string before_prev = ReadFile(dir / "solve/checkpoint.prev.bin");
-    Result r = Run(Solve(dir, "--resume"), 0, "MEBAKE_FAIL_WRITE_AFTER=2000");
+    Result r = Exec(Solve(dir, "--resume"), 0, "MEBAKE_FAIL_WRITE_AFTER=2000");
     EXPECT_EQ(r.code, 1) << r.err;
     EXPECT_NE(r.err.find("checkpoint.next.bin"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("No space left"), std::string::npos) << r.err;
     EXPECT_TRUE(ReadFile(dir / "solve/checkpoint.bin") == before);
     EXPECT_TRUE(ReadFile(dir / "solve/checkpoint.prev.bin") == before_prev);
-    r = Run(Solve(dir, "--resume"));
+    r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(ReadFile(dir / "solve/solution.bin") == reference_);
 }
@@ -360,22 +360,25 @@ TEST_F(Damage, FullTmpfsKeepsThePreviousCheckpoint) {
         GTEST_SKIP() << "cannot mount a tmpfs here (needs root / CAP_SYS_ADMIN)";
     const fs::path small = mnt / "dir";
     fs::copy(dir, small, fs::copy_options::recursive);
+    // The killed write's temporary would be removed on resume and free its space.
+    for (const auto& e : fs::directory_iterator(small / "solve"))
+        if (e.path().filename().string().find(".tmp-") != std::string::npos) fs::remove(e.path());
     {
         std::ofstream filler(mnt / "filler", std::ios::binary);
         std::vector<char> block(4096, 'x');
         while (filler.write(block.data(), std::streamsize(block.size())) && filler.flush()) {
         }
     }
-    // Free half a checkpoint: too little for the next one.
-    fs::resize_file(mnt / "filler", fs::file_size(mnt / "filler") - cp_size / 2);
+    // Free a quarter of a checkpoint: too little for the next one.
+    fs::resize_file(mnt / "filler", fs::file_size(mnt / "filler") - cp_size / 4);
     const std::string before = ReadFile(small / "solve/checkpoint.bin");
-    Result r = Run(Solve(small, "--resume"));
+    Result r = Exec(Solve(small, "--resume"));
     EXPECT_EQ(r.code, 1) << r.err;
     EXPECT_NE(r.err.find("No space left"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("checkpoint"), std::string::npos) << r.err;
     EXPECT_TRUE(ReadFile(small / "solve/checkpoint.bin") == before);
     fs::remove(mnt / "filler");
-    r = Run(Solve(small, "--resume"));
+    r = Exec(Solve(small, "--resume"));
     EXPECT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(ReadFile(small / "solve/solution.bin") == reference_);
     ::umount(mnt.c_str());
@@ -387,14 +390,14 @@ TEST_F(Damage, SigtermSavesACheckpointAndExits130) {
     // SIGTERM at 70% of an uninterrupted solve's time.
     fs::path timed = tmp_ / "sigterm-timing";
     fs::copy(tmp_ / "ingested", timed, fs::copy_options::recursive);
-    Result ref = Run(Solve(timed));
+    Result ref = Exec(Solve(timed));
     ASSERT_EQ(ref.code, 0) << ref.err;
-    Result r = Run(Solve(dir), ref.seconds * 0.7, "", SIGTERM);
+    Result r = Exec(Solve(dir), ref.seconds * 0.7, "", SIGTERM);
     if (r.code == 0)
         GTEST_SKIP() << "the solve finished before SIGTERM arrived";
     EXPECT_EQ(r.code, 130) << r.err;
     EXPECT_NE(r.err.find("--resume"), std::string::npos) << r.err;
-    r = Run(Solve(dir, "--resume"));
+    r = Exec(Solve(dir, "--resume"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(ReadFile(dir / "solve/solution.bin") == reference_);
 }
@@ -409,31 +412,38 @@ TEST(ResumeChecks, ChangedInputAndSettingsAreRefused) {
     fs::permissions(mesh, fs::perms::owner_read | fs::perms::owner_write);
     const std::string bake = kBin + " bake " + mesh.string() + " -o " + out.string() +
                              " --lightmap-resolution 64 --order 1 --max-bounces 2 --threads 2";
-    Result r = Run(bake);
+    Result r = Exec(bake);
     ASSERT_EQ(r.code, 0) << r.err;
     // The same command again: everything reused, outputs the same.
     const std::string glb = ReadFile(out / "baked.glb");
-    r = Run(bake);
+    r = Exec(bake);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("ingest is done"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("already solved"), std::string::npos) << r.err;
     EXPECT_TRUE(ReadFile(out / "baked.glb") == glb);
     // Other solver settings: refused with the --force hint.
-    r = Run(bake + " --tolerance 0.05");
+    r = Exec(bake + " --tolerance 0.05");
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
     // Other ingest options: refused.
-    r = Run(kBin + " bake " + mesh.string() + " -o " + out.string() +
+    r = Exec(kBin + " bake " + mesh.string() + " -o " + out.string() +
             " --lightmap-resolution 128 --order 1 --max-bounces 2 --threads 2");
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find("lightmap_resolution"), std::string::npos) << r.err;
-    // The input changed after ingest: one byte of its vertex data.
-    FlipByte(mesh, fs::file_size(mesh) - 100);
-    r = Run(bake);
+    // The input changed after ingest: one digit of its first vertex (ASCII PLY).
+    {
+        std::string text = ReadFile(mesh);
+        size_t at = text.find("end_header");
+        ASSERT_NE(at, std::string::npos);
+        at = text.find_first_of("123456789", at);
+        text[at] = text[at] == '9' ? '8' : char(text[at] + 1);
+        std::ofstream(mesh, std::ios::binary | std::ios::trunc) << text;
+    }
+    r = Exec(bake);
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find("mesh.ply changed"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
-    r = Run(bake + " --force");
+    r = Exec(bake + " --force");
     EXPECT_EQ(r.code, 0) << r.err;
     fs::remove_all(tmp);
 }
