@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <signal.h>
 #include <sstream>
 #include <string>
@@ -55,7 +56,7 @@ std::string ReadFile(const fs::path& p) {
 // additions `env`; SIGKILLs it after `kill_after` seconds when that is positive, or
 // sends `sig` then. stderr is captured through a file.
 Result Exec(const std::string& cmd, double kill_after = 0, const std::string& env = "",
-           int sig = SIGKILL) {
+            int sig = SIGKILL, const std::function<bool()>& kill_when = {}) {
     static int counter = 0;
     const fs::path err =
         fs::temp_directory_path() /
@@ -71,11 +72,11 @@ Result Exec(const std::string& cmd, double kill_after = 0, const std::string& en
     int status = 0;
     bool sent = false;
     for (;;) {
-        pid_t w = ::waitpid(pid, &status, kill_after > 0 ? WNOHANG : 0);
+        pid_t w = ::waitpid(pid, &status, kill_after > 0 || kill_when ? WNOHANG : 0);
         if (w == pid)
             break;
         const double t = std::chrono::duration<double>(Clock::now() - t0).count();
-        if (!sent && kill_after > 0 && t >= kill_after) {
+        if (!sent && ((kill_after > 0 && t >= kill_after) || (kill_when && kill_when()))) {
             ::kill(pid, sig);
             sent = true;
         }
@@ -168,16 +169,24 @@ TEST(Resume, KilledBakesEndByteIdentical) {
         // resumes what the previous ones left.
         struct Kill {
             int stage;
-            double delay;     // seconds after the start of the run
-            std::string env;  // test hooks
+            double delay;           // seconds after the start of the run
+            std::string env;        // test hooks
+            bool at_solve = false;  // kill as soon as ingest is recorded as done
         };
         std::vector<Kill> plan;
-        for (double f : {0.03, 0.15, 0.3, 0.45, 0.6, 0.75, 0.9})
+        for (double f : {0.03, 0.12, 0.24, 0.36, 0.48, 0.6, 0.72, 0.84, 0.96})
             plan.push_back({0, f * t_ingest, ""});
         const double solve_time = t_solve - t_ingest;
+        // Solve: the first runs die while loading or in the direct pass (nothing saved
+        // yet), then two kill themselves inside checkpoint writes, then runs die at growing
+        // moments, each resuming from the last checkpoint: some before their next
+        // checkpoint, some after one or two.
+        plan.push_back({0, 0, "", true});
+        for (double f : {0.04, 0.08, 0.12, 0.16})
+            plan.push_back({1, f * solve_time, ""});
         plan.push_back({1, 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=1,rotate"});  // between renames
         plan.push_back({1, 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=2"});         // inside the data
-        for (double f : {0.15, 0.25, 0.35, 0.45, 0.55, 0.65})
+        for (double f : {0.06, 0.12, 0.18, 0.24, 0.3, 0.36, 0.42})
             plan.push_back({1, f * solve_time, ""});
         for (double f : {0.1, 0.3, 0.5, 0.7, 0.9})
             plan.push_back({2, f * export_time, ""});
@@ -188,11 +197,19 @@ TEST(Resume, KilledBakesEndByteIdentical) {
             const int stage = Stage(out);
             if (stage > k.stage)
                 continue;  // that stage is over
-            Result r = Exec(BakeCommand(out, scan), k.delay, k.env);
+            std::function<bool()> when;
+            if (k.at_solve)
+                when = [&] {
+                    return Stage(out) >= 1;
+                };
+            Result r = Exec(BakeCommand(out, scan), k.delay, k.env, SIGKILL, when);
+            std::printf("  stage %d, kill after %.2f s%s: %s after %.2f s\n", stage, k.delay,
+                        k.env.empty() ? "" : (" (" + k.env + ")").c_str(),
+                        r.signal == SIGKILL ? "killed" : "finished", r.seconds);
             if (r.signal == SIGKILL) {
                 ++kills;
                 ++per_stage[stage];
-                hook_kills += k.delay == 0 ? 1 : 0;
+                hook_kills += k.env.empty() ? 0 : 1;
             } else {
                 ASSERT_EQ(r.code, 0) << r.err;
             }
@@ -223,7 +240,7 @@ protected:
             return;
         tmp_ = TempDir("damage");
         Result r = Exec(kBin + " ingest " + scan_ + " -o " + (tmp_ / "ingested").string() +
-                       " --lightmap-resolution 128 --threads 2");
+                        " --lightmap-resolution 128 --threads 2");
         ASSERT_EQ(r.code, 0) << r.err;
         fs::copy(tmp_ / "ingested", tmp_ / "ref", fs::copy_options::recursive);
         r = Exec(Solve(tmp_ / "ref"));
@@ -362,7 +379,8 @@ TEST_F(Damage, FullTmpfsKeepsThePreviousCheckpoint) {
     fs::copy(dir, small, fs::copy_options::recursive);
     // The killed write's temporary would be removed on resume and free its space.
     for (const auto& e : fs::directory_iterator(small / "solve"))
-        if (e.path().filename().string().find(".tmp-") != std::string::npos) fs::remove(e.path());
+        if (e.path().filename().string().find(".tmp-") != std::string::npos)
+            fs::remove(e.path());
     {
         std::ofstream filler(mnt / "filler", std::ios::binary);
         std::vector<char> block(4096, 'x');
@@ -427,7 +445,7 @@ TEST(ResumeChecks, ChangedInputAndSettingsAreRefused) {
     EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
     // Other ingest options: refused.
     r = Exec(kBin + " bake " + mesh.string() + " -o " + out.string() +
-            " --lightmap-resolution 128 --order 1 --max-bounces 2 --threads 2");
+             " --lightmap-resolution 128 --order 1 --max-bounces 2 --threads 2");
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find("lightmap_resolution"), std::string::npos) << r.err;
     // The input changed after ingest: one digit of its first vertex (ASCII PLY).
