@@ -1,13 +1,4 @@
 // `mebake ingest`, `mebake solve` and `mebake info <bake directory>`.
-#include <nlohmann/json.hpp>
-
-#include <algorithm>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <stdlib.h>
-#include <sys/stat.h>
-
 #include "app/commands.h"
 #include "app/export_commands.h"
 #include "core/error.h"
@@ -19,13 +10,23 @@
 #include "stream/bake_dir.h"
 #include "stream/ingest.h"
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdlib.h>
+#include <sys/stat.h>
+
 namespace mebake::app {
 
 namespace {
 uint64_t ParseMemory(const std::string& text) {
     auto bytes = ParseByteSize(text);
-    if (!bytes) UsageError("--memory '{}': expected a size such as 512M or 2G", text);
-    if (*bytes < (uint64_t(64) << 20)) UsageError("--memory {}: at least 64M is needed", text);
+    if (!bytes)
+        UsageError("--memory '{}': expected a size such as 512M or 2G", text);
+    if (*bytes < (uint64_t(64) << 20))
+        UsageError("--memory {}: at least 64M is needed", text);
     return *bytes;
 }
 
@@ -46,22 +47,28 @@ std::vector<std::pair<std::string, std::string>> IngestOptionsRecord(const Inges
 // The reason a finished ingest in `dir` cannot be reused for `c`, or "" when it can.
 // Throws Error(Usage) when an input or an option changed: never mixed silently.
 std::string CheckIngestReusable(const std::string& dir, const IngestCommand& c) {
-    if (!stream::IsBakeDirectory(dir)) return "ingest did not finish";
+    if (!stream::IsBakeDirectory(dir))
+        return "ingest did not finish";
     stream::Manifest m = stream::ReadManifest(dir);
-    if (m.state != "ingested") return "ingest did not finish (state '" + m.state + "')";
-    if (m.options.empty()) return "the bake directory does not record its options";
+    if (m.state != "ingested")
+        return "ingest did not finish (state '" + m.state + "')";
+    if (m.options.empty())
+        return "the bake directory does not record its options";
     if (m.inputs.size() != c.inputs.size())
         UsageError("{} was ingested from {} inputs, not {}; pass --force to start over", dir,
                    m.inputs.size(), c.inputs.size());
     for (size_t k = 0; k < c.inputs.size(); ++k) {
         const auto& rec = m.inputs[k];
         const std::string& path = c.inputs[k];
-        if (path == "-") return "stdin cannot be verified without reading it again";
+        if (path == "-")
+            return "stdin cannot be verified without reading it again";
         if (rec.path != path)
             UsageError("input {} was {} when {} was ingested; pass --force to start over", k + 1,
                        rec.path, dir);
-        if (!rec.hashed) return path + " cannot be verified (stdin, or not recorded)";
-        if (!IsRegularFile(path)) return path + " is not a regular file any more";
+        if (!rec.hashed)
+            return path + " cannot be verified (stdin, or not recorded)";
+        if (!IsRegularFile(path))
+            return path + " is not a regular file any more";
         uint64_t size = 0;
         uint32_t crc = 0;
         stream::HashFile(path, &size, &crc);
@@ -133,7 +140,8 @@ int RunSolve(const SolveCommand& c) {
     opt.resume = c.resume;
     opt.force = c.force;
     auto st = solve::RunSolveJob(opt);
-    if (st.stop_reason == "already solved") return 0;
+    if (st.stop_reason == "already solved")
+        return 0;
     spdlog::info("wrote {}/solve/solution.bin; peak memory {}", c.dir, FormatBytes(PeakRssBytes()));
     return 0;
 }
@@ -148,7 +156,8 @@ int RunBake(const BakeCommand& c) {
     bool resuming = false;
     if (to_stdout) {
         char tmpl[] = "/tmp/mebake-bake-XXXXXX";
-        if (!::mkdtemp(tmpl)) IoError({"/tmp"}, "cannot create a temporary directory");
+        if (!::mkdtemp(tmpl))
+            IoError({"/tmp"}, "cannot create a temporary directory");
         out_dir = tmpl;
     } else if (fs::exists(out_dir) && !fs::is_empty(out_dir) && !c.force) {
         if (!fs::exists(marker) && !stream::IsBakeDirectory(dir))
@@ -176,10 +185,12 @@ int RunBake(const BakeCommand& c) {
     if (reason.empty()) {
         spdlog::info("resuming in {}: ingest is done, inputs and options unchanged", out_dir);
     } else {
-        if (resuming) spdlog::info("resuming in {}: {}; ingest starts over", out_dir, reason);
+        if (resuming)
+            spdlog::info("resuming in {}: {}; ingest starts over", out_dir, reason);
         // An ingest killed before its first manifest leaves no manifest: Ingest() refuses
         // to delete such a directory, but it is ours.
-        if (!to_stdout && fs::exists(dir) && !stream::IsBakeDirectory(dir)) fs::remove_all(dir);
+        if (!to_stdout && fs::exists(dir) && !stream::IsBakeDirectory(dir))
+            fs::remove_all(dir);
         RunIngest(ing);
     }
 
@@ -223,7 +234,8 @@ int RunBake(const BakeCommand& c) {
     ren.force = true;
     RunRender(ren);
     spdlog::info("baked: {0}/lightmap.exr (and .png), {0}/baked.glb, {0}/vertex_colors.ply, "
-                 "{0}/render.png", out_dir);
+                 "{0}/render.png",
+                 out_dir);
     return 0;
 }
 
@@ -232,9 +244,11 @@ int RunBakeInfo(const std::string& dir, bool json) {
     namespace fs = std::filesystem;
     uint64_t tile_bytes = 0, total_bytes = 0;
     for (const auto& e : fs::recursive_directory_iterator(dir)) {
-        if (!e.is_regular_file()) continue;
+        if (!e.is_regular_file())
+            continue;
         total_bytes += e.file_size();
-        if (e.path().parent_path().filename() == "tiles") tile_bytes += e.file_size();
+        if (e.path().parent_path().filename() == "tiles")
+            tile_bytes += e.file_size();
     }
     double dist_mean = 0, dist_max = 0, virt = 0, area = 0;
     uint32_t res_min = ~0u, res_max = 0;
@@ -252,7 +266,8 @@ int RunBakeInfo(const std::string& dir, bool json) {
         j["state"] = m.state;
         j["inputs"] = nlohmann::json::array();
         for (const auto& in : m.inputs)
-            j["inputs"].push_back({{"path", in.path}, {"vertices", in.vertices}, {"triangles", in.triangles}});
+            j["inputs"].push_back(
+                {{"path", in.path}, {"vertices", in.vertices}, {"triangles", in.triangles}});
         j["vertices"] = m.vertex_count;
         j["triangles"] = m.face_count;
         j["bricks"] = m.brick_count;
@@ -282,13 +297,16 @@ int RunBakeInfo(const std::string& dir, bool json) {
                 nc ? res_min : 0, res_max);
     std::printf("distortion      mean %.3g%%, worst chart %.3g%% (Jacobian deviation)\n",
                 area > 0 ? 100 * dist_mean / area : 0.0, 100 * dist_max);
-    std::printf("virtual area    %.3g%% of the squares on average\n", nc ? 100 * virt / double(nc) : 0.0);
+    std::printf("virtual area    %.3g%% of the squares on average\n",
+                nc ? 100 * virt / double(nc) : 0.0);
     std::printf("visibility      %llu triangles, deviation %g\n",
                 (unsigned long long)m.proxy_triangles, m.proxy_deviation);
     std::printf("on disk         %s (tiles %s)\n", FormatBytes(total_bytes).c_str(),
                 FormatBytes(tile_bytes).c_str());
-    for (const auto& [k, v] : m.timings) std::printf("time %-10s %s\n", k.c_str(), FormatSeconds(v).c_str());
-    std::printf("solution        %s\n", fs::exists(dir + "/solve/solution.bin") ? "yes" : "not solved yet");
+    for (const auto& [k, v] : m.timings)
+        std::printf("time %-10s %s\n", k.c_str(), FormatSeconds(v).c_str());
+    std::printf("solution        %s\n",
+                fs::exists(dir + "/solve/solution.bin") ? "yes" : "not solved yet");
     return 0;
 }
 

@@ -1,10 +1,10 @@
 #include "solve/solution.h"
 
-#include <cmath>
-#include <cstring>
-
 #include "core/error.h"
 #include "io/chunk_file.h"
+
+#include <cmath>
+#include <cstring>
 
 namespace mebake::solve {
 
@@ -16,12 +16,15 @@ struct Header {
 };
 }  // namespace
 
-std::string SolutionPath(const std::string& dir) { return dir + "/solve/solution.bin"; }
+std::string SolutionPath(const std::string& dir) {
+    return dir + "/solve/solution.bin";
+}
 
 std::vector<PackedNode> PackNodes(const std::vector<QuadNode>& nodes) {
     std::vector<PackedNode> out;
     out.reserve(nodes.size());
-    for (const auto& n : nodes) out.push_back({n.first_child, n.level, n.i, n.j});
+    for (const auto& n : nodes)
+        out.push_back({n.first_child, n.level, n.i, n.j});
     return out;
 }
 
@@ -33,7 +36,8 @@ std::vector<QuadNode> UnpackNodes(const std::vector<PackedNode>& packed, const s
         if (p.first_child >= 0 &&
             (size_t(p.first_child) <= k || size_t(p.first_child) + 4 > packed.size()))
             CorruptError({path}, "chart {}: node {} has bad children", c, k);
-        if (p.level > 30) CorruptError({path}, "chart {}: node {} level {}", c, k, p.level);
+        if (p.level > 30)
+            CorruptError({path}, "chart {}: node {} level {}", c, k, p.level);
         nodes[k] = QuadNode{p.first_child, uint8_t(p.level), p.i, p.j};
     }
     return nodes;
@@ -41,10 +45,12 @@ std::vector<QuadNode> UnpackNodes(const std::vector<PackedNode>& packed, const s
 
 uint64_t ReadSolutionKey(const std::string& path) {
     io::ChunkReader r(path, Tag("SOLN"), kSolutionVersion, kSolutionVersion);
-    if (!r.Has(Tag("SKEY"))) return 0;
+    if (!r.Has(Tag("SKEY")))
+        return 0;
     auto b = r.Read(Tag("SKEY"));
     uint64_t key = 0;
-    if (b.size() != sizeof(key)) CorruptError({path}, "SKEY chunk has the wrong size");
+    if (b.size() != sizeof(key))
+        CorruptError({path}, "SKEY chunk has the wrong size");
     std::memcpy(&key, b.data(), sizeof(key));
     return key;
 }
@@ -56,7 +62,8 @@ void WriteSolution(const std::string& path, const std::vector<ChartField>& field
              uint32_t(fields.empty() ? 0 : fields[0].blocks()), uint32_t(fields.size()),
              radiosity ? 1u : 0u};
     w.Add(Tag("HEAD"), 0, {reinterpret_cast<const uint8_t*>(&h), sizeof(h)}, false);
-    if (key != 0) w.Add(Tag("SKEY"), 0, {reinterpret_cast<const uint8_t*>(&key), sizeof(key)}, false);
+    if (key != 0)
+        w.Add(Tag("SKEY"), 0, {reinterpret_cast<const uint8_t*>(&key), sizeof(key)}, false);
     for (uint32_t c = 0; c < fields.size(); ++c) {
         w.AddArray(Tag("NODE"), c, PackNodes(fields[c].nodes()));
         w.AddArray(Tag("COEF"), c, fields[c].values());
@@ -68,7 +75,8 @@ Solution ReadSolution(const std::string& path) {
     io::ChunkReader r(path, Tag("SOLN"), kSolutionVersion, kSolutionVersion);
     auto hb = r.Read(Tag("HEAD"));
     Header h{};
-    if (hb.size() != sizeof(h)) CorruptError({path}, "HEAD chunk has the wrong size");
+    if (hb.size() != sizeof(h))
+        CorruptError({path}, "HEAD chunk has the wrong size");
     std::memcpy(&h, hb.data(), sizeof(h));
     if (h.order > 3 || (h.blocks != 3 && h.blocks != 9) || h.charts > (1u << 28))
         CorruptError({path}, "HEAD chunk is inconsistent");
@@ -80,9 +88,11 @@ Solution ReadSolution(const std::string& path) {
         ChartField f(int(h.order), int(h.blocks));
         std::vector<QuadNode> nodes = UnpackNodes(packed, path, c);
         if (nodes.empty() || coef.size() != nodes.size() * size_t(f.stride()))
-            CorruptError({path}, "chart {}: {} coefficients for {} nodes", c, coef.size(), nodes.size());
+            CorruptError({path}, "chart {}: {} coefficients for {} nodes", c, coef.size(),
+                         nodes.size());
         for (float x : coef)
-            if (!std::isfinite(x)) CorruptError({path}, "chart {}: non-finite coefficient", c);
+            if (!std::isfinite(x))
+                CorruptError({path}, "chart {}: non-finite coefficient", c);
         std::vector<float> unshot(coef.size(), 0.f);
         f.Assign(std::move(nodes), std::move(coef), std::move(unshot));
         s.fields.push_back(std::move(f));

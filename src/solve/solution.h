@@ -2,10 +2,10 @@
 // quadtree with its coefficients per chart. Export and render read it with the tiles.
 #pragma once
 
+#include "solve/field.h"
+
 #include <string>
 #include <vector>
-
-#include "solve/field.h"
 
 namespace mebake::solve {
 

@@ -1,15 +1,5 @@
 #include "solve/solve_job.h"
 
-#include <nlohmann/json.hpp>
-
-#include <signal.h>
-
-#include <atomic>
-#include <chrono>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-
 #include "core/checksum.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -24,6 +14,14 @@
 #include "stream/bake_dir.h"
 #include "stream/tile.h"
 
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sstream>
+
 namespace mebake::solve {
 
 namespace fs = std::filesystem;
@@ -37,10 +35,12 @@ constexpr size_t kMaxEmissiveTriangles = 256;
 void LoadProxy(const std::string& dir, VisibilityScene& vis) {
     io::ChunkReader r(stream::ProxyPath(dir), io::Tag("PRXY"), 1, 1);
     for (auto [tag, index] : r.List()) {
-        if (tag != io::Tag("PPOS")) continue;
+        if (tag != io::Tag("PPOS"))
+            continue;
         auto pos = r.ReadArray<float>(io::Tag("PPOS"), index);
         auto tri = r.ReadArray<uint32_t>(io::Tag("PTRI"), index);
-        if (!tri.empty()) vis.AddTriangles(pos, tri, "proxy");
+        if (!tri.empty())
+            vis.AddTriangles(pos, tri, "proxy");
     }
     vis.Commit();
 }
@@ -49,7 +49,9 @@ void LoadProxy(const std::string& dir, VisibilityScene& vis) {
 // the next batch boundary (or skips the rest of the direct pass) and a checkpoint is
 // written. SA_RESETHAND: a second signal kills at once.
 std::atomic<bool> g_stop{false};
-void OnStopSignal(int) { g_stop.store(true); }
+void OnStopSignal(int) {
+    g_stop.store(true);
+}
 
 class StopSignals {
 public:
@@ -68,7 +70,8 @@ public:
     }
 
 private:
-    struct sigaction old_int_ {}, old_term_ {};
+    struct sigaction old_int_ {
+    }, old_term_{};
 };
 
 // Canonical text of everything besides the tiles that the solution depends on.
@@ -100,10 +103,14 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", opt.dir,
                    m.state);
     Scene scene = LoadScene(m, opt.scene_file);
-    if (opt.order >= 0) scene.solver.order = opt.order;
-    if (opt.tolerance > 0) scene.solver.tolerance = opt.tolerance;
-    if (opt.max_bounces >= 0) scene.solver.max_bounces = opt.max_bounces;
-    if (opt.time_limit > 0) scene.solver.time_limit = opt.time_limit;
+    if (opt.order >= 0)
+        scene.solver.order = opt.order;
+    if (opt.tolerance > 0)
+        scene.solver.tolerance = opt.tolerance;
+    if (opt.max_bounces >= 0)
+        scene.solver.max_bounces = opt.max_bounces;
+    if (opt.time_limit > 0)
+        scene.solver.time_limit = opt.time_limit;
     scene.solver.radiosity = opt.radiosity;
     spdlog::info("scene: {}", scene.description);
 
@@ -129,7 +136,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
             done.stop_reason = "already solved";
             return done;
         } catch (const Error& e) {
-            if (e.kind() != ErrorKind::Corrupt) throw;
+            if (e.kind() != ErrorKind::Corrupt)
+                throw;
             spdlog::warn("{}; solving again", e.what());
         }
     }
@@ -142,14 +150,16 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         charts[size_t(c)].geometry = std::move(tile.geometry);
         charts[size_t(c)].scale = tile.meta.scale;
         int level = 0;
-        while ((1u << level) < tile.meta.resolution) ++level;
+        while ((1u << level) < tile.meta.resolution)
+            ++level;
         charts[size_t(c)].max_level = level;
     });
 
     // Small emissive surfaces -> polygon lights.
     bool any_emissive = false;
     for (const auto& mats : scene.per_input)
-        for (const auto& mat : mats) any_emissive |= mat.emissive();
+        for (const auto& mat : mats)
+            any_emissive |= mat.emissive();
     bool shoot_emission = false;
     if (any_emissive) {
         std::vector<PolygonLight> lights;
@@ -157,11 +167,14 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
             auto tile = stream::ReadTile(stream::TilePath(opt.dir, c), stream::TileParts::Mesh);
             for (size_t t = 0; t < tile.triangles.size(); ++t) {
                 const Material& mat = scene.MaterialOf(tile.material[t]);
-                if (!mat.emissive()) continue;
+                if (!mat.emissive())
+                    continue;
                 PolygonLight pl;
-                for (uint32_t v : tile.triangles[t]) pl.vertices.push_back(Vec3d(tile.position[v]));
+                for (uint32_t v : tile.triangles[t])
+                    pl.vertices.push_back(Vec3d(tile.position[v]));
                 pl.radiance = Vec3d(mat.emission);
-                if (PolygonArea(pl.vertices) > 0) lights.push_back(pl);
+                if (PolygonArea(pl.vertices) > 0)
+                    lights.push_back(pl);
             }
         }
         if (lights.size() <= kMaxEmissiveTriangles) {
@@ -222,7 +235,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                          unshot * 100, FormatCount(double(rays)).c_str(),
                          FormatCount(secs > 0 ? double(rays) / secs : 0).c_str());
     });
-    if (tty) std::fprintf(stderr, "\n");
+    if (tty)
+        std::fprintf(stderr, "\n");
     const SolveStats& st = solver.stats();
     if (st.stop_reason == "interrupted") {
         if (solver.next_batch() < 0)
@@ -259,7 +273,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["batches"] = st.batches;
     j["shots"] = st.shots;
     j["rays"] = st.rays;
-    j["seconds"] = {{"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
+    j["seconds"] = {
+        {"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
     j["rays_per_second"] = st.seconds_direct + st.seconds_indirect > 0
                                ? double(st.rays) / (st.seconds_direct + st.seconds_indirect)
                                : 0.0;
@@ -277,7 +292,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                         {"interval", opt.checkpoint_interval}};
     std::string text = j.dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
-        if (path.empty()) continue;
+        if (path.empty())
+            continue;
         auto out = io::OutputStream::Open(path);
         out->Write(text);
         out->Commit();

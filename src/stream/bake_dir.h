@@ -15,19 +15,19 @@
 // it always describes files that are complete. Resume rules: docs/resume.md.
 #pragma once
 
+#include "core/vec.h"
+
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 
 constexpr int kManifestVersion = 1;
 
 struct InputRecord {
-    std::string path;         // as given ("-" for stdin)
-    uint64_t bytes = 0;       // bytes read
+    std::string path;    // as given ("-" for stdin)
+    uint64_t bytes = 0;  // bytes read
     // Identity of a file input, so a resumed bake notices a changed input: its size and
     // the CRC-32 of all its bytes (core/checksum.h). hashed = false: not recorded (stdin,
     // or a directory ingested before this was recorded).
@@ -44,17 +44,17 @@ struct InputRecord {
 struct ChartRecord {
     uint32_t brick = 0;
     uint32_t triangles = 0, vertices = 0;
-    uint32_t resolution = 0;        // texels per side of the chart's square
-    double scale = 0;               // 3D length of the unit square's side
-    double area = 0;                // real (3D) surface area
-    double area_distortion = 0;     // area-weighted mean |J/J_mean - 1|
-    double virtual_fraction = 0;    // part of the unit square not covered by the chart
+    uint32_t resolution = 0;      // texels per side of the chart's square
+    double scale = 0;             // 3D length of the unit square's side
+    double area = 0;              // real (3D) surface area
+    double area_distortion = 0;   // area-weighted mean |J/J_mean - 1|
+    double virtual_fraction = 0;  // part of the unit square not covered by the chart
     Vec3f bbox_min{}, bbox_max{};
 };
 
 struct Manifest {
     int version = kManifestVersion;
-    std::string state;              // "spilled", "binned", "ingested"
+    std::string state;  // "spilled", "binned", "ingested"
     std::vector<InputRecord> inputs;
     // Settings that determine the tiles' bytes.
     double texel_size = 0;
@@ -71,7 +71,7 @@ struct Manifest {
     uint32_t brick_count = 0;
     std::vector<ChartRecord> charts;
     uint64_t proxy_triangles = 0;
-    double proxy_deviation = 0;     // max distance of the proxy from the input surface
+    double proxy_deviation = 0;  // max distance of the proxy from the input surface
     // Timings of the passes, seconds.
     std::vector<std::pair<std::string, double>> timings;
 };
