@@ -132,7 +132,7 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
             w.AddArray(Tag("VALU"), c, fields[c].values());
             w.AddArray(Tag("UNSH"), c, fields[c].unshots());
         }
-        w.Finish(false);  // fsynced and renamed; the directory is synced below
+        w.Finish(true);  // durable under its name before the rotation below
         size = w.bytes_written();
     }
     const std::string cur = CheckpointPath(dir);
