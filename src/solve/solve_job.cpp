@@ -14,6 +14,7 @@
 #include "stream/bake_dir.h"
 #include "stream/tile.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -211,14 +212,21 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     uint64_t checkpoints = 0, checkpoint_bytes = 0;
     double checkpoint_seconds = 0;
     auto last_checkpoint = Clock::now();
+    // A positive interval is stretched to 32 times the last checkpoint's duration, so
+    // checkpoints never take more than ~3% of the solve (large fields on slow disks).
+    double last_duration = 0;
     solver.SetBatchHook([&](int next_batch) {
         const bool stop = g_stop.load();
         const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
-        if (stop || (opt.checkpoint_interval >= 0 && since >= opt.checkpoint_interval)) {
+        const double interval = opt.checkpoint_interval > 0
+                                    ? std::max(opt.checkpoint_interval, 32 * last_duration)
+                                    : opt.checkpoint_interval;
+        if (stop || (interval >= 0 && since >= interval)) {
             const auto t = Clock::now();
             checkpoint_bytes = WriteCheckpoint(opt.dir, solver, key);
             last_checkpoint = Clock::now();
             const double secs = std::chrono::duration<double>(last_checkpoint - t).count();
+            last_duration = secs;
             checkpoint_seconds += secs;
             ++checkpoints;
             spdlog::debug("checkpoint before batch {}: {} in {}", next_batch,
