@@ -173,10 +173,12 @@ Manifest ReadManifest(const std::string& dir) {
 }
 
 void HashFile(const std::string& path, uint64_t* size, uint32_t* crc32) {
-    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    const bool is_stdin = path == "-";
+    int fd = is_stdin ? 0 : ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         IoError({path}, "cannot open: {}", ErrnoString(errno));
-    ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+    if (!is_stdin)
+        ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
     std::vector<uint8_t> buf(size_t(4) << 20);
     uint64_t total = 0;
     uint32_t crc = 0;
@@ -186,15 +188,17 @@ void HashFile(const std::string& path, uint64_t* size, uint32_t* crc32) {
             if (errno == EINTR)
                 continue;
             int err = errno;
-            ::close(fd);
-            IoError({path, total}, "read failed: {}", ErrnoString(err));
+            if (!is_stdin)
+                ::close(fd);
+            IoError({is_stdin ? "<stdin>" : path, total}, "read failed: {}", ErrnoString(err));
         }
         if (n == 0)
             break;
         crc = Crc32(buf.data(), size_t(n), crc);
         total += uint64_t(n);
     }
-    ::close(fd);
+    if (!is_stdin)
+        ::close(fd);
     *size = total;
     *crc32 = crc;
 }

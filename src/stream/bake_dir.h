@@ -29,8 +29,9 @@ struct InputRecord {
     std::string path;    // as given ("-" for stdin)
     uint64_t bytes = 0;  // bytes read
     // Identity of a file input, so a resumed bake notices a changed input: its size and
-    // the CRC-32 of all its bytes (core/checksum.h). hashed = false: not recorded (stdin,
-    // or a directory ingested before this was recorded).
+    // the CRC-32 of all its bytes (core/checksum.h); for stdin, of all the bytes that came
+    // through it. hashed = false: not recorded (a directory ingested before this was
+    // recorded).
     bool hashed = false;
     uint64_t file_size = 0;
     uint32_t crc32 = 0;
@@ -86,7 +87,8 @@ void WriteManifest(const std::string& dir, const Manifest& m);
 Manifest ReadManifest(const std::string& dir);
 bool IsBakeDirectory(const std::string& path);
 
-// Size and CRC-32 of a whole file, read sequentially. Throws Error(Io) naming it.
+// Size and CRC-32 of a whole file ("-": all of stdin), read sequentially. Throws
+// Error(Io) naming it.
 void HashFile(const std::string& path, uint64_t* size, uint32_t* crc32);
 
 }  // namespace mebake::stream

@@ -461,6 +461,20 @@ TEST(ResumeChecks, ChangedInputAndSettingsAreRefused) {
     EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
     r = Exec(bake + " --force");
     EXPECT_EQ(r.code, 0) << r.err;
+
+    // From stdin: the identity of what came through the pipe is recorded and checked.
+    const std::string piped = "sh -c 'cat " + mesh.string() + " | " + kBin + " bake - -o " +
+                              (tmp / "piped").string() +
+                              " --lightmap-resolution 64 --order 1 --max-bounces 2 --threads 2'";
+    r = Exec(piped);
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = Exec(piped);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("ingest is done"), std::string::npos) << r.err;
+    std::ofstream(mesh, std::ios::binary | std::ios::app) << "\n";
+    r = Exec(piped);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("stdin changed"), std::string::npos) << r.err;
     fs::remove_all(tmp);
 }
 
