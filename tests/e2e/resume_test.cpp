@@ -171,7 +171,7 @@ TEST(Resume, KilledBakesEndByteIdentical) {
             int stage;
             double delay;           // seconds after the start of the run
             std::string env;        // test hooks
-            bool at_solve = false;  // kill as soon as ingest is recorded as done
+            int kill_at_stage = 0;  // > 0: kill as soon as the directory reaches that stage
         };
         std::vector<Kill> plan;
         for (double f : {0.03, 0.12, 0.24, 0.36, 0.48, 0.6, 0.72, 0.84, 0.96})
@@ -181,13 +181,14 @@ TEST(Resume, KilledBakesEndByteIdentical) {
         // yet), then two kill themselves inside checkpoint writes, then runs die at growing
         // moments, each resuming from the last checkpoint: some before their next
         // checkpoint, some after one or two.
-        plan.push_back({0, 0, "", true});
+        plan.push_back({0, 0, "", 1});  // right when ingest is recorded as done
         for (double f : {0.04, 0.08, 0.12, 0.16})
             plan.push_back({1, f * solve_time, ""});
         plan.push_back({1, 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=1,rotate"});  // between renames
         plan.push_back({1, 0, "MEBAKE_TEST_KILL_IN_CHECKPOINT=2"});         // inside the data
         for (double f : {0.06, 0.12, 0.18, 0.24, 0.3, 0.36, 0.42})
             plan.push_back({1, f * solve_time, ""});
+        plan.push_back({1, 0, "", 2});  // right when solution.bin is in place
         for (double f : {0.05, 0.15, 0.25, 0.35, 0.45})
             plan.push_back({2, f * export_time, ""});
 
@@ -198,9 +199,9 @@ TEST(Resume, KilledBakesEndByteIdentical) {
             if (stage > k.stage)
                 continue;  // that stage is over
             std::function<bool()> when;
-            if (k.at_solve)
+            if (k.kill_at_stage > 0)
                 when = [&] {
-                    return Stage(out) >= 1;
+                    return Stage(out) >= k.kill_at_stage;
                 };
             Result r = Exec(BakeCommand(out, scan), k.delay, k.env, SIGKILL, when);
             std::printf("  stage %d, kill after %.2f s%s: %s after %.2f s\n", stage, k.delay,
