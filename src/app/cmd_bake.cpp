@@ -7,6 +7,7 @@
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
+#include "solve/checkpoint.h"
 #include "solve/solve_job.h"
 #include "stream/bake_dir.h"
 #include "stream/ingest.h"
@@ -389,6 +390,7 @@ int RunBakeInfo(const std::string& dir, bool json) {
         j["tile_bytes"] = tile_bytes;
         j["total_bytes"] = total_bytes;
         j["solved"] = fs::exists(dir + "/solve/solution.bin");
+        j["checkpoint"] = solve::HasCheckpoint(dir);
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
@@ -415,6 +417,10 @@ int RunBakeInfo(const std::string& dir, bool json) {
         std::printf("time %-10s %s\n", k.c_str(), FormatSeconds(v).c_str());
     std::printf("solution        %s\n",
                 fs::exists(dir + "/solve/solution.bin") ? "yes" : "not solved yet");
+    if (solve::HasCheckpoint(dir))
+        std::printf(
+            "checkpoint      an interrupted solve: `mebake solve --resume %s` continues it\n",
+            dir.c_str());
     return 0;
 }
 
