@@ -52,6 +52,9 @@ struct SolveCommand {
     std::string memory = "1G";
     std::string unknown = "irradiance";
     std::string stats_file;
+    double checkpoint_interval = 30;  // seconds between checkpoints (0: every batch; < 0: never)
+    bool resume = false;              // continue from the last good checkpoint
+    bool force = false;               // discard checkpoints, solve from the start
 };
 int RunSolve(const SolveCommand& opt);
 
@@ -63,10 +66,15 @@ struct BakeCommand {
     std::string memory = "1G";
     int threads = 0;
     int order = -1;
+    double tolerance = -1;
+    int max_bounces = -1;
     uint32_t lightmap_resolution = 2048;
+    double checkpoint_interval = 30;
     bool force = false;
 };
-// ingest + solve + export (+ a render) with defaults; see docs/usage in README.
+// ingest + solve + export (+ a render) with defaults; see docs/usage in README. On an
+// existing output directory it resumes (docs/resume.md): a finished ingest whose inputs
+// and options match is kept, the solve continues from its checkpoint, exports are redone.
 int RunBake(const BakeCommand& opt);
 
 // `mebake info <bake directory>`.

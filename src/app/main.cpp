@@ -118,6 +118,13 @@ int main(int argc, char** argv) {
     sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity")->capture_default_str()
         ->check(CLI::IsMember({"irradiance", "radiosity"}));
     sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
+    sol_cmd->add_option("--checkpoint-interval", sol.checkpoint_interval,
+                        "Seconds between checkpoints (solve/checkpoint.bin; 0: every batch, "
+                        "negative: only on SIGINT/SIGTERM)")->capture_default_str();
+    auto* sol_resume = sol_cmd->add_flag("--resume", sol.resume,
+                                         "Continue an interrupted solve from its last good checkpoint");
+    sol_cmd->add_flag("-f,--force", sol.force, "Discard checkpoints and solve from the start")
+        ->excludes(sol_resume);
 
     // export  (#include "app/export_commands.h")
     mebake::app::ExportCommand exp;
@@ -183,9 +190,14 @@ int main(int argc, char** argv) {
     bk_cmd->add_option("--memory", bk.memory, "Memory budget")->capture_default_str();
     bk_cmd->add_option("--threads", bk.threads, "Worker threads (0: all cores)")->capture_default_str();
     bk_cmd->add_option("--order", bk.order, "Wavelet order 0..3 (default 2)")->check(CLI::Range(0, 3));
+    bk_cmd->add_option("--tolerance", bk.tolerance, "Relative error that triggers subdivision (default 0.02)");
+    bk_cmd->add_option("--max-bounces", bk.max_bounces, "Shooting batches after the direct pass (default 16)");
+    bk_cmd->add_option("--checkpoint-interval", bk.checkpoint_interval,
+                       "Seconds between solver checkpoints (0: every batch)")->capture_default_str();
     bk_cmd->add_option("--lightmap-resolution", bk.lightmap_resolution,
                        "Atlas side the texel size aims at")->capture_default_str();
-    bk_cmd->add_flag("-f,--force", bk.force, "Replace outputs in an existing directory");
+    bk_cmd->add_flag("-f,--force", bk.force,
+                     "Start over in an existing directory (without it, a bake resumes there)");
 
     try {
         app.parse(argc, argv);

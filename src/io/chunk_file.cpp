@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
 #include <cerrno>
 #include <filesystem>
 #include <limits>
@@ -71,7 +73,21 @@ ChunkWriter::~ChunkWriter() {
     if (!finished_ && !temp_.empty()) ::unlink(temp_.c_str());
 }
 
+// Test hook: MEBAKE_FAIL_WRITE_AFTER=<bytes> makes every chunk file write fail once this
+// process has written that many bytes through ChunkWriter, as a full disk would.
+static uint64_t InjectedWriteLimit() {
+    static const uint64_t limit = [] {
+        const char* s = std::getenv("MEBAKE_FAIL_WRITE_AFTER");
+        return s ? std::strtoull(s, nullptr, 10) : std::numeric_limits<uint64_t>::max();
+    }();
+    return limit;
+}
+
 void ChunkWriter::WriteAt(const void* data, size_t n, uint64_t offset) {
+    static std::atomic<uint64_t> total{0};
+    if ((total += n) > InjectedWriteLimit())
+        IoError({path_}, "write failed: {} (injected by MEBAKE_FAIL_WRITE_AFTER)",
+                ErrnoString(ENOSPC));
     auto p = static_cast<const char*>(data);
     while (n > 0) {
         ssize_t w = ::pwrite(fd_, p, n, off_t(offset));

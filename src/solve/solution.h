@@ -2,10 +2,10 @@
 // quadtree with its coefficients per chart. Export and render read it with the tiles.
 #pragma once
 
+#include "solve/field.h"
+
 #include <string>
 #include <vector>
-
-#include "solve/field.h"
 
 namespace mebake::solve {
 
@@ -13,8 +13,23 @@ constexpr uint32_t kSolutionVersion = 1;
 
 std::string SolutionPath(const std::string& dir);
 
-// Writes order, blocks and every chart's nodes and values (not the unshot residual).
-void WriteSolution(const std::string& path, const std::vector<ChartField>& fields, bool radiosity);
+// Writes order, blocks and every chart's nodes and values (not the unshot residual), and
+// `key` (chunk SKEY): the fingerprint of the tiles and settings it was solved from, so a
+// resumed bake can tell whether the solution still fits (checkpoint.h SolveKey).
+void WriteSolution(const std::string& path, const std::vector<ChartField>& fields, bool radiosity,
+                   uint64_t key = 0);
+// The SKEY of a solution file; 0 when it has none. Throws like ReadSolution.
+uint64_t ReadSolutionKey(const std::string& path);
+
+// Quadtree nodes as stored on disk (no padding, so a file's bytes are fully determined).
+struct PackedNode {
+    int32_t first_child;
+    uint32_t level, i, j;
+};
+std::vector<PackedNode> PackNodes(const std::vector<QuadNode>& nodes);
+// Checks the tree structure; throws Error(Corrupt) naming `path` and the chart.
+std::vector<QuadNode> UnpackNodes(const std::vector<PackedNode>& packed, const std::string& path,
+                                  uint32_t chart);
 
 struct Solution {
     bool radiosity = false;

@@ -1,22 +1,27 @@
 #include "solve/solve_job.h"
 
-#include <nlohmann/json.hpp>
-
-#include <chrono>
-#include <filesystem>
-#include <fstream>
-
+#include "core/checksum.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
+#include "solve/checkpoint.h"
 #include "solve/polygon_light.h"
 #include "solve/solution.h"
 #include "solve/visibility.h"
 #include "stream/bake_dir.h"
 #include "stream/tile.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sstream>
 
 namespace mebake::solve {
 
@@ -31,12 +36,61 @@ constexpr size_t kMaxEmissiveTriangles = 256;
 void LoadProxy(const std::string& dir, VisibilityScene& vis) {
     io::ChunkReader r(stream::ProxyPath(dir), io::Tag("PRXY"), 1, 1);
     for (auto [tag, index] : r.List()) {
-        if (tag != io::Tag("PPOS")) continue;
+        if (tag != io::Tag("PPOS"))
+            continue;
         auto pos = r.ReadArray<float>(io::Tag("PPOS"), index);
         auto tri = r.ReadArray<uint32_t>(io::Tag("PTRI"), index);
-        if (!tri.empty()) vis.AddTriangles(pos, tri, "proxy");
+        if (!tri.empty())
+            vis.AddTriangles(pos, tri, "proxy");
     }
     vis.Commit();
+}
+
+// SIGINT / SIGTERM during the solve: the handler only sets the flag; the solver stops at
+// the next batch boundary (or skips the rest of the direct pass) and a checkpoint is
+// written. SA_RESETHAND: a second signal kills at once.
+std::atomic<bool> g_stop{false};
+void OnStopSignal(int) {
+    g_stop.store(true);
+}
+
+class StopSignals {
+public:
+    StopSignals() {
+        g_stop.store(false);
+        struct sigaction sa {};
+        sa.sa_handler = OnStopSignal;
+        sa.sa_flags = SA_RESETHAND;
+        sigemptyset(&sa.sa_mask);
+        ::sigaction(SIGINT, &sa, &old_int_);
+        ::sigaction(SIGTERM, &sa, &old_term_);
+    }
+    ~StopSignals() {
+        ::sigaction(SIGINT, &old_int_, nullptr);
+        ::sigaction(SIGTERM, &old_term_, nullptr);
+    }
+
+private:
+    struct sigaction old_int_ {
+    }, old_term_{};
+};
+
+// Canonical text of everything besides the tiles that the solution depends on.
+std::string SettingsText(const Scene& scene, const std::string& scene_file) {
+    const SolverSettings& s = scene.solver;
+    std::string scene_hash = "default";
+    if (!scene_file.empty()) {
+        std::ifstream f(scene_file, std::ios::binary);
+        std::stringstream text;
+        text << f.rdbuf();
+        const std::string bytes = text.str();
+        scene_hash = fmt::format("{:08x}", Crc32(bytes.data(), bytes.size()));
+    }
+    return fmt::format(
+        "checkpoint {} order {} tolerance {:.17g} bounces {} stop {:.17g} time {:.17g} sky {} "
+        "light {} radiosity {} scene {}",
+        kCheckpointVersion, s.order, s.tolerance, s.max_bounces, s.stop_fraction, s.time_limit,
+        s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash);
 }
 
 }  // namespace
@@ -50,12 +104,44 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", opt.dir,
                    m.state);
     Scene scene = LoadScene(m, opt.scene_file);
-    if (opt.order >= 0) scene.solver.order = opt.order;
-    if (opt.tolerance > 0) scene.solver.tolerance = opt.tolerance;
-    if (opt.max_bounces >= 0) scene.solver.max_bounces = opt.max_bounces;
-    if (opt.time_limit > 0) scene.solver.time_limit = opt.time_limit;
+    if (opt.order >= 0)
+        scene.solver.order = opt.order;
+    if (opt.tolerance > 0)
+        scene.solver.tolerance = opt.tolerance;
+    if (opt.max_bounces >= 0)
+        scene.solver.max_bounces = opt.max_bounces;
+    if (opt.time_limit > 0)
+        scene.solver.time_limit = opt.time_limit;
     scene.solver.radiosity = opt.radiosity;
     spdlog::info("scene: {}", scene.description);
+
+    // What a checkpoint or a finished solution must have been made from to be reused.
+    const uint64_t key = SolveKey(opt.dir, m.charts.size(), SettingsText(scene, opt.scene_file));
+    fs::create_directories(opt.dir + "/solve");
+    if (opt.force) {
+        RemoveCheckpoints(opt.dir);
+    } else if (HasCheckpoint(opt.dir) && !opt.resume) {
+        UsageError("{} holds the checkpoint of an interrupted solve; pass --resume to continue "
+                   "it, or --force to start over",
+                   opt.dir);
+    } else if (opt.resume && !HasCheckpoint(opt.dir) && fs::exists(SolutionPath(opt.dir))) {
+        const uint64_t had = ReadSolutionKey(SolutionPath(opt.dir));
+        if (had != key)
+            UsageError("{} was solved from other tiles or settings (order, tolerance, bounces, "
+                       "scene); pass --force to solve again",
+                       SolutionPath(opt.dir));
+        try {
+            ReadSolution(SolutionPath(opt.dir));  // every chunk's checksum
+            spdlog::info("{} is already solved with these settings; kept", opt.dir);
+            SolveStats done;
+            done.stop_reason = "already solved";
+            return done;
+        } catch (const Error& e) {
+            if (e.kind() != ErrorKind::Corrupt)
+                throw;
+            spdlog::warn("{}; solving again", e.what());
+        }
+    }
 
     // Charts' geometry images (in memory for now; a tile cache will bound this).
     std::vector<SolveChart> charts(m.charts.size());
@@ -65,14 +151,16 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         charts[size_t(c)].geometry = std::move(tile.geometry);
         charts[size_t(c)].scale = tile.meta.scale;
         int level = 0;
-        while ((1u << level) < tile.meta.resolution) ++level;
+        while ((1u << level) < tile.meta.resolution)
+            ++level;
         charts[size_t(c)].max_level = level;
     });
 
     // Small emissive surfaces -> polygon lights.
     bool any_emissive = false;
     for (const auto& mats : scene.per_input)
-        for (const auto& mat : mats) any_emissive |= mat.emissive();
+        for (const auto& mat : mats)
+            any_emissive |= mat.emissive();
     bool shoot_emission = false;
     if (any_emissive) {
         std::vector<PolygonLight> lights;
@@ -80,11 +168,14 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
             auto tile = stream::ReadTile(stream::TilePath(opt.dir, c), stream::TileParts::Mesh);
             for (size_t t = 0; t < tile.triangles.size(); ++t) {
                 const Material& mat = scene.MaterialOf(tile.material[t]);
-                if (!mat.emissive()) continue;
+                if (!mat.emissive())
+                    continue;
                 PolygonLight pl;
-                for (uint32_t v : tile.triangles[t]) pl.vertices.push_back(Vec3d(tile.position[v]));
+                for (uint32_t v : tile.triangles[t])
+                    pl.vertices.push_back(Vec3d(tile.position[v]));
                 pl.radiance = Vec3d(mat.emission);
-                if (PolygonArea(pl.vertices) > 0) lights.push_back(pl);
+                if (PolygonArea(pl.vertices) > 0)
+                    lights.push_back(pl);
             }
         }
         if (lights.size() <= kMaxEmissiveTriangles) {
@@ -108,6 +199,41 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                  so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
 
     Solver solver(scene, charts, vis, so);
+    if (opt.resume && !opt.force) {
+        auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
+                                 charts.size());
+        if (cp) {
+            spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
+            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        }
+    }
+    StopSignals signals;
+    solver.SetStopFlag(&g_stop);
+    uint64_t checkpoints = 0, checkpoint_bytes = 0;
+    double checkpoint_seconds = 0;
+    auto last_checkpoint = Clock::now();
+    // A positive interval is stretched to 32 times the last checkpoint's duration, so
+    // checkpoints never take more than ~3% of the solve (large fields on slow disks).
+    double last_duration = 0;
+    solver.SetBatchHook([&](int next_batch) {
+        const bool stop = g_stop.load();
+        const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
+        const double interval = opt.checkpoint_interval > 0
+                                    ? std::max(opt.checkpoint_interval, 32 * last_duration)
+                                    : opt.checkpoint_interval;
+        if (stop || (interval >= 0 && since >= interval)) {
+            const auto t = Clock::now();
+            checkpoint_bytes = WriteCheckpoint(opt.dir, solver, key);
+            last_checkpoint = Clock::now();
+            const double secs = std::chrono::duration<double>(last_checkpoint - t).count();
+            last_duration = secs;
+            checkpoint_seconds += secs;
+            ++checkpoints;
+            spdlog::debug("checkpoint before batch {}: {} in {}", next_batch,
+                          FormatBytes(checkpoint_bytes), FormatSeconds(secs));
+        }
+        return !stop;
+    });
     const bool tty = StderrIsTerminal();
     auto t_run = Clock::now();
     solver.Run([&](int batch, double unshot, uint64_t rays) {
@@ -117,18 +243,29 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                          unshot * 100, FormatCount(double(rays)).c_str(),
                          FormatCount(secs > 0 ? double(rays) / secs : 0).c_str());
     });
-    if (tty) std::fprintf(stderr, "\n");
+    if (tty)
+        std::fprintf(stderr, "\n");
     const SolveStats& st = solver.stats();
+    if (st.stop_reason == "interrupted") {
+        if (solver.next_batch() < 0)
+            throw Error(ErrorKind::Cancelled,
+                        fmt::format("interrupted during the direct pass, before the first "
+                                    "checkpoint; run `mebake solve --resume {}` to solve again",
+                                    opt.dir));
+        throw Error(ErrorKind::Cancelled,
+                    fmt::format("interrupted; the solve is saved in {} (next batch {}); continue "
+                                "with `mebake solve --resume {}` or the same `mebake bake` command",
+                                CheckpointPath(opt.dir), solver.next_batch(), opt.dir));
+    }
     double total = std::chrono::duration<double>(Clock::now() - t0).count();
     spdlog::info("solved in {} ({} batches, {} rays, {} leaves, stop: {}, unshot {:.3g}%)",
                  FormatSeconds(total), st.batches, FormatCount(double(st.rays)),
                  FormatCount(double(st.leaves)), st.stop_reason,
                  st.emitted_power > 0 ? 100 * st.unshot_power / st.emitted_power : 0.0);
 
-    fs::create_directories(opt.dir + "/solve");
-    WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity);
     // Export and render shade with the same materials: keep the scene file beside the
-    // solution (without one, the inputs' materials and the default rig are rebuilt).
+    // solution (without one, the inputs' materials and the default rig are rebuilt). It
+    // and the statistics go first: solution.bin is the commit point of the solve.
     const std::string kept = opt.dir + "/solve/scene.json";
     if (!opt.scene_file.empty()) {
         fs::copy_file(opt.scene_file, kept + ".tmp", fs::copy_options::overwrite_existing);
@@ -144,7 +281,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["batches"] = st.batches;
     j["shots"] = st.shots;
     j["rays"] = st.rays;
-    j["seconds"] = {{"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
+    j["seconds"] = {
+        {"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
     j["rays_per_second"] = st.seconds_direct + st.seconds_indirect > 0
                                ? double(st.rays) / (st.seconds_direct + st.seconds_indirect)
                                : 0.0;
@@ -156,13 +294,24 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["emitted_power"] = st.emitted_power;
     j["unshot_power"] = st.unshot_power;
     j["stop_reason"] = st.stop_reason;
+    j["checkpoints"] = {{"count", checkpoints},
+                        {"bytes", checkpoint_bytes},
+                        {"seconds", checkpoint_seconds},
+                        {"interval", opt.checkpoint_interval}};
     std::string text = j.dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
-        if (path.empty()) continue;
+        if (path.empty())
+            continue;
         auto out = io::OutputStream::Open(path);
         out->Write(text);
         out->Commit();
     }
+    WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity, key);
+    RemoveCheckpoints(opt.dir);
+    io::SyncDirectory(opt.dir + "/solve");
+    if (checkpoints)
+        spdlog::info("{} checkpoints of {} took {}", checkpoints, FormatBytes(checkpoint_bytes),
+                     FormatSeconds(checkpoint_seconds));
     return st;
 }
 

@@ -1,25 +1,32 @@
 // `mebake solve` as a library call: a bake directory in, solve/solution.bin and
 // solve/stats.json out. Loads the scene, the charts' geometry images and the visibility
 // mesh, turns small emissive surfaces into exact polygon lights, and runs the solver.
+// Checkpoints (checkpoint.h) are written every checkpoint_interval seconds at batch
+// boundaries and on SIGINT/SIGTERM (then Error(Cancelled): exit 130); `resume` continues
+// from the newest good one, or reuses a finished solution made from the same tiles and
+// settings (docs/resume.md).
 #pragma once
 
-#include <string>
-
 #include "solve/solver.h"
+
+#include <string>
 
 namespace mebake::solve {
 
 struct SolveJobOptions {
     std::string dir;
-    std::string scene_file;       // empty: inputs' materials + default rig
-    int order = -1;               // -1: from the scene file (default 2)
+    std::string scene_file;  // empty: inputs' materials + default rig
+    int order = -1;          // -1: from the scene file (default 2)
     double tolerance = -1;
     int max_bounces = -1;
     double time_limit = 0;
     int threads = 0;
     uint64_t memory = uint64_t(1) << 30;
     bool radiosity = false;
-    std::string stats_file;       // extra copy of the statistics (JSON)
+    std::string stats_file;           // extra copy of the statistics (JSON)
+    double checkpoint_interval = 30;  // seconds; 0: at every batch boundary; < 0: only on signals
+    bool resume = false;              // continue from a checkpoint / keep a matching solution
+    bool force = false;               // discard checkpoints and solve from the start
 };
 
 SolveStats RunSolveJob(const SolveJobOptions& opt);

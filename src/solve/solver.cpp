@@ -477,13 +477,26 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     field.PushPending();
 }
 
+void Solver::Restore(std::vector<ChartField> fields, double reference, int next_batch,
+                     const SolveStats& stats) {
+    CHECK_EQ(fields.size(), charts_.size());
+    CHECK(next_batch >= 0);
+    fields_ = std::move(fields);
+    reference_ = reference;
+    next_batch_ = next_batch;
+    stats_ = stats;
+}
+
 void Solver::Run(const Progress& progress) {
     const auto t0 = Clock::now();
     const uint32_t nc = uint32_t(charts_.size());
-    const uint64_t rays0 = TotalRays();
+    // A resumed run continues the counters and the time limit of the runs before it.
+    const uint64_t rays0 = TotalRays() - stats_.rays;
+    const double seconds_before = stats_.seconds_direct + stats_.seconds_indirect;
+    const double indirect_before = stats_.seconds_indirect;
 
     // Reference irradiance for the refinement floor: the brightest root-level estimate.
-    {
+    if (next_batch_ < 0) {
         DirectLight direct(scene_, opt_.settings, vis_, opt_.ray_offset, opt_.scene_size);
         std::vector<ReceiverPoint> pts;
         for (const auto& c : charts_) {
@@ -503,14 +516,28 @@ void Solver::Run(const Progress& progress) {
         reference_ = ref;
     }
 
-    ParallelFor(0, nc, [&](int64_t c) { RefineDirect(uint32_t(c)); });
-    stats_.seconds_direct = Since(t0);
+    if (next_batch_ < 0) {
+        ParallelFor(0, nc, [&](int64_t c) {
+            if (!stop_ || !stop_->load()) RefineDirect(uint32_t(c));
+        });
+        stats_.seconds_direct = Since(t0);
+        if (stop_ && stop_->load()) {
+            stats_.stop_reason = "interrupted";
+            return;
+        }
+        next_batch_ = 0;
+        stats_.rays = TotalRays() - rays0;
+        if (batch_hook_ && !batch_hook_(next_batch_)) {
+            stats_.stop_reason = "interrupted";
+            return;
+        }
+    }
 
     // Southwell batches.
     const auto t1 = Clock::now();
     std::vector<double> power(nc);
-    bool first = true;
-    for (int batch = 0;; ++batch) {
+    bool first = next_batch_ == 0;
+    for (int batch = next_batch_;; ++batch) {
         ParallelFor(0, nc, [&](int64_t c) { power[size_t(c)] = UnshotPower(uint32_t(c), first); });
         double total = 0, largest = 0;
         for (double p : power) {
@@ -529,7 +556,8 @@ void Solver::Run(const Progress& progress) {
             stats_.stop_reason = "bounce limit";
             break;
         }
-        if (opt_.settings.time_limit > 0 && Since(t0) > opt_.settings.time_limit) {
+        if (opt_.settings.time_limit > 0 &&
+            seconds_before + Since(t0) > opt_.settings.time_limit) {
             stats_.stop_reason = "time limit";
             break;
         }
@@ -548,8 +576,15 @@ void Solver::Run(const Progress& progress) {
         stats_.shots += shooters.size();
         stats_.batches = batch + 1;
         first = false;
+        next_batch_ = batch + 1;
+        stats_.seconds_indirect = indirect_before + Since(t1);
+        stats_.rays = TotalRays() - rays0;
+        if (batch_hook_ && !batch_hook_(next_batch_)) {
+            stats_.stop_reason = "interrupted";
+            return;
+        }
     }
-    stats_.seconds_indirect = Since(t1);
+    stats_.seconds_indirect = indirect_before + Since(t1);
     stats_.rays = TotalRays() - rays0;
     for (const auto& f : fields_) {
         for (const auto& n : f.nodes()) {

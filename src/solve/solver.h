@@ -15,6 +15,7 @@
 // order: the result is bit-identical for any thread count.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -72,6 +73,22 @@ public:
     using Progress = std::function<void(int, double, uint64_t)>;
     void Run(const Progress& progress = {});
 
+    // Checkpoints (checkpoint.h). At every batch boundary (after the direct pass and after
+    // each batch) Run() calls the hook with the index of the next batch; returning false
+    // stops the run there with stop_reason "interrupted". The state at a boundary is
+    // fields() (pending all zero), reference(), next_batch() and stats(); Restore() puts
+    // it back, and Run() then skips the direct pass and continues with the same batches
+    // an uninterrupted run would shoot.
+    using BatchHook = std::function<bool(int next_batch)>;
+    void SetBatchHook(BatchHook hook) { batch_hook_ = std::move(hook); }
+    // Once *stop is set the direct pass skips its remaining charts and Run() returns
+    // "interrupted" with nothing resumable (a signal handler sets it).
+    void SetStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
+    void Restore(std::vector<ChartField> fields, double reference, int next_batch,
+                 const SolveStats& stats);
+    double reference() const { return reference_; }
+    int next_batch() const { return next_batch_; }  // -1 before the direct pass is done
+
     const std::vector<ChartField>& fields() const { return fields_; }
     std::vector<ChartField>& mutable_fields() { return fields_; }
     const SolveStats& stats() const { return stats_; }
@@ -103,6 +120,9 @@ private:
     std::vector<uint8_t> emissive_;  // chart has emissive texels (shot in the first batch)
     SolveStats stats_;
     double reference_ = 0;  // brightest direct irradiance: floor of the refinement scale
+    int next_batch_ = -1;
+    BatchHook batch_hook_;
+    const std::atomic<bool>* stop_ = nullptr;
 };
 
 }  // namespace mebake::solve

@@ -1,0 +1,225 @@
+// Solver checkpoints in process: a solve stopped at a batch boundary, written, read back
+// into a new solver and resumed ends bit-identical to an uninterrupted solve (also on
+// another thread count); checkpointing at every boundary changes nothing; a checkpoint
+// of other settings is refused, a damaged one is named.
+#include "solve/checkpoint.h"
+
+#include "core/error.h"
+#include "core/parallel.h"
+#include "solve/polygon_light.h"
+#include "solve/visibility.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+namespace mebake::solve {
+namespace {
+
+namespace fs = std::filesystem;
+using Surface = std::function<Vec3d(double, double)>;
+
+// An open box (five faces of the unit cube seen from inside) lit by a small square light
+// below its ceiling: several bounces of interreflection.
+struct Box {
+    Scene scene;
+    std::vector<SolveChart> charts;
+    VisibilityScene vis;
+
+    Box() {
+        Material m;
+        m.albedo = Vec3f(0.7f, 0.6f, 0.5f);
+        m.use_vertex_colors = false;
+        scene.per_input = {{m}};
+        PolygonLight light;
+        light.vertices = {{0.4, 0.95, 0.4}, {0.6, 0.95, 0.4}, {0.6, 0.95, 0.6}, {0.4, 0.95, 0.6}};
+        light.radiance = {5, 4, 3};
+        scene.lights.push_back(light);
+        const Surface faces[] = {
+            [](double u, double v) { return Vec3d(u, 0, 1 - v); },  // floor, normal +y
+            [](double u, double v) { return Vec3d(u, v, 0); },      // back wall, +z
+            [](double u, double v) { return Vec3d(0, u, v); },      // left wall, +x
+            [](double u, double v) { return Vec3d(1, v, u); },      // right wall, -x
+            [](double u, double v) { return Vec3d(v, 1, u); },      // ceiling, -y
+        };
+        for (const auto& f : faces)
+            Add(f, 16);
+        vis.Commit();
+    }
+
+    void Add(const Surface& f, int res) {
+        SolveChart chart;
+        auto& img = chart.geometry;
+        img.resolution = uint32_t(res);
+        int levels = 0;
+        while ((1 << levels) < res)
+            ++levels;
+        img.levels.resize(size_t(levels) + 1);
+        auto& fine = img.levels.back();
+        fine.resize(size_t(res) * res);
+        const double h = 1.0 / res, e = 1e-5;
+        for (int j = 0; j < res; ++j) {
+            for (int i = 0; i < res; ++i) {
+                double u = (i + 0.5) * h, v = (j + 0.5) * h;
+                Vec3d pu = (f(u + e, v) - f(u - e, v)) / (2 * e);
+                Vec3d pv = (f(u, v + e) - f(u, v - e)) / (2 * e);
+                Vec3d n = Cross(pu, pv);
+                stream::GeometryTexel& t = fine[size_t(j) * res + i];
+                t.position = Vec3f(f(u, v));
+                t.normal = Vec3f(Normalize(n));
+                t.vis_point = t.position;
+                t.color = Vec3f(-1, -1, -1);
+                t.area = float(Length(n) * h * h);
+                t.coverage = 1;
+                t.radius = float(0.75 * h * (Length(pu) + Length(pv)));
+                t.material = 0;
+            }
+        }
+        img.BuildPyramid();
+        chart.scale = 1;
+        charts.push_back(chart);
+        std::vector<float> xyz;
+        std::vector<uint32_t> tris;
+        for (int j = 0; j <= res; ++j)
+            for (int i = 0; i <= res; ++i) {
+                Vec3d q = f(i * h, j * h);
+                xyz.insert(xyz.end(), {float(q.x), float(q.y), float(q.z)});
+            }
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i) {
+                uint32_t a = uint32_t(j * (res + 1) + i), b = a + 1, c = a + uint32_t(res) + 1,
+                         d = c + 1;
+                tris.insert(tris.end(), {a, b, d, a, d, c});
+            }
+        vis.AddTriangles(xyz, tris, "box");
+    }
+};
+
+SolveOptions Options() {
+    SolveOptions opt;
+    opt.settings.order = 1;
+    opt.settings.max_bounces = 6;
+    opt.settings.stop_fraction = 1e-6;  // run every bounce
+    opt.batch_fraction = 0.5;           // several batches per bounce
+    return opt;
+}
+
+std::vector<float> Values(const Solver& s) {
+    std::vector<float> all;
+    for (const auto& f : s.fields()) {
+        all.insert(all.end(), f.values().begin(), f.values().end());
+        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
+    }
+    return all;
+}
+
+bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+std::string FreshDir(const std::string& name) {
+    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p / "solve");
+    return p.string();
+}
+
+constexpr uint64_t kKey = 0x1234567890abcdefull;
+
+TEST(Checkpoint, ResumedSolveIsBitIdentical) {
+    Box box;
+    Solver full(box.scene, box.charts, box.vis, Options());
+    int boundaries = 0;
+    full.SetBatchHook([&](int) {
+        ++boundaries;
+        return true;
+    });
+    full.Run();
+    ASSERT_GE(full.stats().batches, 3) << "the scene should need several batches";
+    EXPECT_EQ(boundaries, full.stats().batches + 1);  // after the direct pass and each batch
+    const std::vector<float> want = Values(full);
+
+    // Without a hook: the same bits (the hook only observes).
+    Solver plain(box.scene, box.charts, box.vis, Options());
+    plain.Run();
+    EXPECT_TRUE(SameBits(Values(plain), want));
+
+    for (int stop_at : {0, 1, 2}) {
+        const std::string dir = FreshDir("checkpoint");
+        Solver first(box.scene, box.charts, box.vis, Options());
+        first.SetBatchHook([&](int next) {
+            if (next < stop_at)
+                return true;
+            WriteCheckpoint(dir, first, kKey);
+            return false;
+        });
+        first.Run();
+        EXPECT_EQ(first.stats().stop_reason, "interrupted");
+        ASSERT_TRUE(fs::exists(CheckpointPath(dir)));
+
+        // Resumed on another thread count.
+        ThreadLimit limit(1);
+        auto cp = LoadCheckpoint(dir, kKey, 1, 9, box.charts.size());
+        ASSERT_TRUE(cp.has_value());
+        EXPECT_EQ(cp->next_batch, stop_at);
+        Solver second(box.scene, box.charts, box.vis, Options());
+        second.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        second.Run();
+        EXPECT_TRUE(SameBits(Values(second), want)) << "stopped before batch " << stop_at;
+        EXPECT_EQ(second.stats().batches, full.stats().batches);
+        EXPECT_EQ(second.stats().shots, full.stats().shots);
+        EXPECT_EQ(second.stats().rays, full.stats().rays);
+        EXPECT_EQ(second.stats().stop_reason, full.stats().stop_reason);
+        fs::remove_all(fs::path(dir));
+    }
+}
+
+TEST(Checkpoint, RotationKeepsThePreviousAndDamageIsNamed) {
+    Box box;
+    const std::string dir = FreshDir("checkpoint-rot");
+    Solver s(box.scene, box.charts, box.vis, Options());
+    s.SetBatchHook([&](int next) {
+        WriteCheckpoint(dir, s, kKey);
+        return next < 2;
+    });
+    s.Run();
+    auto latest = ReadCheckpoint(CheckpointPath(dir), kKey, 1, 9, box.charts.size());
+    auto prev = ReadCheckpoint(PrevCheckpointPath(dir), kKey, 1, 9, box.charts.size());
+    EXPECT_EQ(latest.next_batch, 2);
+    EXPECT_EQ(prev.next_batch, 1);
+
+    // Other settings: refused, not mixed.
+    try {
+        LoadCheckpoint(dir, kKey + 1, 1, 9, box.charts.size());
+        ADD_FAILURE() << "a checkpoint of other settings was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Usage);
+        EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+    }
+
+    // A flipped byte in the newest: named, and the previous one is used.
+    {
+        const auto size = fs::file_size(CheckpointPath(dir));
+        std::fstream f(CheckpointPath(dir), std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(std::streamoff(size / 2));
+        f.put('\x5a');
+    }
+    try {
+        ReadCheckpoint(CheckpointPath(dir), kKey, 1, 9, box.charts.size());
+        ADD_FAILURE() << "a damaged checkpoint was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Corrupt);
+        EXPECT_NE(std::string(e.what()).find("checkpoint.bin"), std::string::npos) << e.what();
+    }
+    auto cp = LoadCheckpoint(dir, kKey, 1, 9, box.charts.size());
+    ASSERT_TRUE(cp.has_value());
+    EXPECT_EQ(cp->next_batch, 1);
+    EXPECT_EQ(cp->path, PrevCheckpointPath(dir));
+    fs::remove_all(fs::path(dir).parent_path() / fs::path(dir).filename());
+}
+
+}  // namespace
+}  // namespace mebake::solve
