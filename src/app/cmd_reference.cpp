@@ -15,6 +15,7 @@
 #include "solve/probe.h"
 #include "solve/reference.h"
 #include "solve/solution.h"
+#include "stream/trimesh.h"
 
 namespace mebake::app {
 
@@ -142,6 +143,8 @@ int RunReference(const ReferenceCommand& c) {
                   {"triangle", p.local_triangle},
                   {"barycentric", J(p.barycentric)},
                   {"uv", J(p.uv)},
+                  {"face", p.face_id == stream::kNoId ? json(nullptr) : json(p.face_id)},
+                  {"vertex_ids", json::array({p.vertex_ids[0], p.vertex_ids[1], p.vertex_ids[2]})},
                   {"position", J(p.position)},
                   {"normal", J(p.normal)},
                   {"albedo", J(p.albedo)},

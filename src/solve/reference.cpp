@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <limits>
 #include <span>
 
 #include "core/check.h"
@@ -12,6 +13,7 @@
 #include "core/parallel.h"
 #include "solve/visibility.h"
 #include "stream/tile.h"
+#include "stream/trimesh.h"
 
 namespace mebake::solve {
 
@@ -167,6 +169,10 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
         mesh.position.insert(mesh.position.end(), tile.position.begin(), tile.position.end());
         mesh.normal.insert(mesh.normal.end(), tile.normal.begin(), tile.normal.end());
         mesh.uv.insert(mesh.uv.end(), tile.uv.begin(), tile.uv.end());
+        if (tile.vertex_id.size() == n)
+            mesh.vertex_id.insert(mesh.vertex_id.end(), tile.vertex_id.begin(), tile.vertex_id.end());
+        else
+            mesh.vertex_id.insert(mesh.vertex_id.end(), n, stream::kNoId);
         if (!tile.color.empty()) {
             if (!any_color) mesh.color.assign(base, Vec3f(-1, -1, -1));
             any_color = true;
@@ -184,6 +190,8 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
             mesh.material.push_back(tile.material[t]);
             mesh.chart.push_back(c);
             mesh.local_triangle.push_back(uint32_t(t));
+            mesh.face_id.push_back(tile.face_id.size() == tile.triangles.size() ? tile.face_id[t]
+                                                                              : stream::kNoId);
         }
     }
     return mesh;
@@ -263,6 +271,11 @@ std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, con
         p.triangle = uint32_t(t);
         p.chart = mesh.chart[t];
         p.local_triangle = mesh.local_triangle[t];
+        p.face_id = t < mesh.face_id.size() ? mesh.face_id[t] : stream::kNoId;
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = mesh.triangles[t][size_t(k)];
+            p.vertex_ids[size_t(k)] = v < mesh.vertex_id.size() ? mesh.vertex_id[v] : stream::kNoId;
+        }
         p.barycentric = Vec3f(float(b[0]), float(b[1]), float(b[2]));
         p.uv = s.uv;
         p.position = s.position;

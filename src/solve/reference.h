@@ -43,6 +43,8 @@ struct ReferenceMesh {
     std::vector<uint32_t> material;        // packed material id per triangle
     std::vector<uint32_t> chart;           // per triangle
     std::vector<uint32_t> local_triangle;  // index within its chart's tile
+    std::vector<uint64_t> face_id;         // input triangle per triangle (kNoId: hole fill)
+    std::vector<uint64_t> vertex_id;       // input vertex per vertex (kNoId: added by repair)
 };
 
 // Reads every tile's mesh. Throws Error(Corrupt) naming the tile on malformed tiles.
@@ -66,6 +68,8 @@ struct ReferencePoint {
     // Where: the triangle of the mesh, barycentrics, and the same point as a chart point.
     uint32_t triangle = 0, chart = 0, local_triangle = 0;
     Vec3f barycentric{};
+    uint64_t face_id = 0;                  // input triangle (to map into other tools' outputs)
+    std::array<uint64_t, 3> vertex_ids{};  // input vertices of the corners, in barycentric order
     Vec2f uv{};
     Vec3d position{}, normal{}, geometric_normal{};
     Vec3d albedo{}, emission{};  // linear; emission is radiance Le
