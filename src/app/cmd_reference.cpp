@@ -1,11 +1,5 @@
 // `mebake reference`: path-traced B and E at random surface points (solve/reference.h), and
 // `mebake compare`: the solved bake at the same points (solve/probe.h) scored against them.
-#include <nlohmann/json.hpp>
-
-#include <filesystem>
-#include <fstream>
-#include <iostream>
-
 #include "app/reference_commands.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -17,6 +11,11 @@
 #include "solve/solution.h"
 #include "stream/trimesh.h"
 
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
 namespace mebake::app {
 
 namespace {
@@ -24,9 +23,15 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json J(const Vec3d& v) { return json::array({v.x, v.y, v.z}); }
-json J(const Vec3f& v) { return json::array({v.x, v.y, v.z}); }
-json J(const Vec2f& v) { return json::array({v.x, v.y}); }
+json J(const Vec3d& v) {
+    return json::array({v.x, v.y, v.z});
+}
+json J(const Vec3f& v) {
+    return json::array({v.x, v.y, v.z});
+}
+json J(const Vec2f& v) {
+    return json::array({v.x, v.y});
+}
 
 void WriteJson(const json& j, const std::string& path) {
     if (path == "-") {
@@ -36,9 +41,11 @@ void WriteJson(const json& j, const std::string& path) {
     const std::string tmp = path + ".tmp";
     {
         std::ofstream f(tmp);
-        if (!f) IoError({tmp}, "cannot create");
+        if (!f)
+            IoError({tmp}, "cannot create");
         f << j.dump(1) << "\n";
-        if (!f) IoError({tmp}, "write failed");
+        if (!f)
+            IoError({tmp}, "write failed");
     }
     fs::rename(tmp, path);
 }
@@ -71,7 +78,8 @@ solve::ProbeError Score(const solve::BakeView& view, const std::vector<solve::Pr
                         std::vector<solve::ProbeValue>& values) {
     values = solve::ProbeSolution(view, sites);
     std::vector<Vec3d> bake(values.size());
-    for (size_t i = 0; i < values.size(); ++i) bake[i] = Vec3d(values[i].b);
+    for (size_t i = 0; i < values.size(); ++i)
+        bake[i] = Vec3d(values[i].b);
     return solve::CompareRadiosity(ref, se, bake);
 }
 
@@ -133,8 +141,9 @@ int RunReference(const ReferenceCommand& c) {
         const solve::BakeView view = solve::OpenBakeView(c.dir);
         const solve::ProbeError e = Score(view, sites, ref, se, values);
         j["error"] = ErrorJson(e);
-        spdlog::info("bake vs reference: relative RMS {:.2f}% (reference noise {:.2f}%), max {:.1f}%",
-                     100 * e.relative_rms, 100 * e.noise_rms, 100 * e.relative_max);
+        spdlog::info(
+            "bake vs reference: relative RMS {:.2f}% (reference noise {:.2f}%), max {:.1f}%",
+            100 * e.relative_rms, 100 * e.noise_rms, 100 * e.relative_max);
     }
     json pts = json::array();
     for (size_t i = 0; i < points.size(); ++i) {
@@ -168,15 +177,16 @@ int RunCompare(const CompareCommand& c) {
     json r;
     {
         std::ifstream f(c.reference);
-        if (!f) IoError({c.reference}, "cannot open");
+        if (!f)
+            IoError({c.reference}, "cannot open");
         try {
             r = json::parse(f);
         } catch (const json::exception& e) {
             InputError({c.reference}, "not JSON: {}", e.what());
         }
     }
-    if (!r.is_object() || r.value("format", "") != "mebake-reference-1" ||
-        !r.contains("points") || !r["points"].is_array())
+    if (!r.is_object() || r.value("format", "") != "mebake-reference-1" || !r.contains("points") ||
+        !r["points"].is_array())
         InputError({c.reference}, "not a `mebake reference` output (format mebake-reference-1)");
     std::vector<solve::ProbeSite> sites;
     std::vector<Vec3d> ref, se;
@@ -188,8 +198,8 @@ int RunCompare(const CompareCommand& c) {
         const uint64_t chart = p["chart"].get<uint64_t>(), tri = p["triangle"].get<uint64_t>();
         if (chart > 0xFFFFFFFFull || tri > 0xFFFFFFFFull)
             InputError({c.reference}, "point {}: chart or triangle out of range", i);
-        sites.push_back({uint32_t(chart), uint32_t(tri),
-                         Vec3f(ReadVec3(p, c.reference, i, "barycentric"))});
+        sites.push_back(
+            {uint32_t(chart), uint32_t(tri), Vec3f(ReadVec3(p, c.reference, i, "barycentric"))});
         ref.push_back(ReadVec3(p, c.reference, i, "B"));
         se.push_back(ReadVec3(p, c.reference, i, "B_se"));
     }

@@ -1,11 +1,11 @@
 #include "solve/probe.h"
 
+#include "core/check.h"
+#include "core/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include "core/check.h"
-#include "core/error.h"
 
 namespace mebake::solve {
 
@@ -27,10 +27,13 @@ std::vector<ProbeValue> ProbeSolution(const BakeView& view, std::span<const Prob
                      [&](uint32_t a, uint32_t b) { return sites[a].chart < sites[b].chart; });
     std::vector<uint32_t> charts;
     for (uint32_t i : order)
-        if (charts.empty() || charts.back() != sites[i].chart) charts.push_back(sites[i].chart);
+        if (charts.empty() || charts.back() != sites[i].chart)
+            charts.push_back(sites[i].chart);
     std::vector<size_t> first(view.chart_count() + 1, 0);
-    for (const ProbeSite& s : sites) ++first[s.chart + 1];
-    for (size_t c = 0; c < view.chart_count(); ++c) first[c + 1] += first[c];
+    for (const ProbeSite& s : sites)
+        ++first[s.chart + 1];
+    for (size_t c = 0; c < view.chart_count(); ++c)
+        first[c + 1] += first[c];
     ForEachTile(
         view, charts, stream::TileParts::Mesh,
         [&](uint32_t c, const stream::ChartTile& tile) {
@@ -62,7 +65,8 @@ ProbeError CompareRadiosity(std::span<const Vec3d> reference, std::span<const Ve
     CHECK_EQ(reference.size(), reference_se.size());
     ProbeError r;
     r.points = reference.size();
-    if (reference.empty()) return r;
+    if (reference.empty())
+        return r;
     double ref2 = 0, err2 = 0, se2 = 0, max_err = 0, sum_b = 0, sum_r = 0;
     for (size_t i = 0; i < reference.size(); ++i) {
         const Vec3d d = bake[i] - reference[i];
@@ -77,7 +81,8 @@ ProbeError CompareRadiosity(std::span<const Vec3d> reference, std::span<const Ve
     const double level = std::sqrt(ref2 / n);
     r.mean_bake = sum_b / n;
     r.mean_reference = sum_r / n;
-    if (!(level > 0)) return r;
+    if (!(level > 0))
+        return r;
     r.relative_rms = std::sqrt(err2 / n) / level;
     r.relative_max = max_err / level;
     r.noise_rms = std::sqrt(se2 / n) / level;

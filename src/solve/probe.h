@@ -4,12 +4,12 @@
 // vertex colours and renders (bake_view.h), so what is scored is what is exported.
 #pragma once
 
+#include "core/vec.h"
+#include "solve/bake_view.h"
+
 #include <cstdint>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
-#include "solve/bake_view.h"
 
 namespace mebake::solve {
 
@@ -20,8 +20,8 @@ struct ProbeSite {
 };
 
 struct ProbeValue {
-    Vec3f b{};                // radiosity B
-    Vec3f e[3] = {};          // vector irradiance per colour (zero for a radiosity solution)
+    Vec3f b{};        // radiosity B
+    Vec3f e[3] = {};  // vector irradiance per colour (zero for a radiosity solution)
     Vec2f uv{};
     Vec3f normal{};
 };

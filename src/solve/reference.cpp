@@ -1,19 +1,19 @@
 #include "solve/reference.h"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cmath>
-#include <numbers>
-#include <limits>
-#include <span>
-
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "solve/visibility.h"
 #include "stream/tile.h"
 #include "stream/trimesh.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <span>
 
 namespace mebake::solve {
 
@@ -45,7 +45,8 @@ float SrgbDecode(float c) {
 Vec3d Albedo(const Material& m, const Vec3f& color) {
     Vec3f a = m.albedo;
     if (m.use_vertex_colors && color.x >= 0)
-        for (int c = 0; c < 3; ++c) a[c] = std::min(0.99f, SrgbDecode(color[c]) * m.color_factor);
+        for (int c = 0; c < 3; ++c)
+            a[c] = std::min(0.99f, SrgbDecode(color[c]) * m.color_factor);
     return Vec3d(a);
 }
 
@@ -72,8 +73,12 @@ Vec3d UniformHemisphere(const Vec3d& n, double u1, double u2) {
     return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
 }
 
-double MaxOf(const Vec3d& v) { return std::max(v.x, std::max(v.y, v.z)); }
-Vec3d Mul(const Vec3d& a, const Vec3d& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+double MaxOf(const Vec3d& v) {
+    return std::max(v.x, std::max(v.y, v.z));
+}
+Vec3d Mul(const Vec3d& a, const Vec3d& b) {
+    return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
 
 // An emitter sampled by area: a polygon light (rejection-sampled in its plane) or an
 // emissive triangle of the mesh.
@@ -108,7 +113,8 @@ struct Emitter {
             return true;
         }
         for (int k = 0; k < 256; ++k) {
-            const Vec2d q(lo.x + (hi.x - lo.x) * rng.Uniform(), lo.y + (hi.y - lo.y) * rng.Uniform());
+            const Vec2d q(lo.x + (hi.x - lo.x) * rng.Uniform(),
+                          lo.y + (hi.y - lo.y) * rng.Uniform());
             if (Inside(q)) {
                 y = origin + ax * q.x + ay * q.y;
                 return true;
@@ -130,7 +136,8 @@ Emitter MakePolygonEmitter(const PolygonLight& pl) {
         n += Vec3d((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
     }
     e.normal = Normalize(n);
-    if (!(Dot(e.normal, e.normal) > 0)) return e;  // degenerate: area 0, never sampled
+    if (!(Dot(e.normal, e.normal) > 0))
+        return e;  // degenerate: area 0, never sampled
     e.origin = v[0];
     Vec3d t, b;
     Frame(e.normal, t, b);
@@ -165,16 +172,19 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
             (!tile.color.empty() && tile.color.size() != n))
             CorruptError({path}, "tile arrays disagree in size");
         const uint32_t base = uint32_t(mesh.position.size());
-        if (uint64_t(base) + n > 0xFFFFFFF0ull) InputError({path}, "mesh too large for a reference");
+        if (uint64_t(base) + n > 0xFFFFFFF0ull)
+            InputError({path}, "mesh too large for a reference");
         mesh.position.insert(mesh.position.end(), tile.position.begin(), tile.position.end());
         mesh.normal.insert(mesh.normal.end(), tile.normal.begin(), tile.normal.end());
         mesh.uv.insert(mesh.uv.end(), tile.uv.begin(), tile.uv.end());
         if (tile.vertex_id.size() == n)
-            mesh.vertex_id.insert(mesh.vertex_id.end(), tile.vertex_id.begin(), tile.vertex_id.end());
+            mesh.vertex_id.insert(mesh.vertex_id.end(), tile.vertex_id.begin(),
+                                  tile.vertex_id.end());
         else
             mesh.vertex_id.insert(mesh.vertex_id.end(), n, stream::kNoId);
         if (!tile.color.empty()) {
-            if (!any_color) mesh.color.assign(base, Vec3f(-1, -1, -1));
+            if (!any_color)
+                mesh.color.assign(base, Vec3f(-1, -1, -1));
             any_color = true;
             mesh.color.insert(mesh.color.end(), tile.color.begin(), tile.color.end());
         } else if (any_color) {
@@ -183,7 +193,8 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
         for (size_t t = 0; t < tile.triangles.size(); ++t) {
             std::array<uint32_t, 3> f = tile.triangles[t];
             for (uint32_t& i : f) {
-                if (i >= n) CorruptError({path}, "triangle {} has vertex {} of {}", t, i, n);
+                if (i >= n)
+                    CorruptError({path}, "triangle {} has vertex {} of {}", t, i, n);
                 i += base;
             }
             mesh.triangles.push_back(f);
@@ -191,7 +202,7 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
             mesh.chart.push_back(c);
             mesh.local_triangle.push_back(uint32_t(t));
             mesh.face_id.push_back(tile.face_id.size() == tile.triangles.size() ? tile.face_id[t]
-                                                                              : stream::kNoId);
+                                                                                : stream::kNoId);
         }
     }
     return mesh;
@@ -228,13 +239,15 @@ Surface SurfaceAt(const ReferenceMesh& mesh, const Scene& scene, uint32_t t, con
         n += Vec3d(mesh.normal[f[k]]) * b[k];
         uv += mesh.uv[f[k]] * float(b[k]);
         if (colored) {
-            if (mesh.color[f[k]].x < 0) colored = false;
+            if (mesh.color[f[k]].x < 0)
+                colored = false;
             col += Vec3d(mesh.color[f[k]]) * b[k];
         }
     }
     s.normal = Normalize(n);
     // A shading normal on the wrong side of its triangle (or none) falls back to the plane's.
-    if (!(Dot(s.normal, s.geometric_normal) > 0)) s.normal = s.geometric_normal;
+    if (!(Dot(s.normal, s.geometric_normal) > 0))
+        s.normal = s.geometric_normal;
     s.uv = uv;
     s.material = &scene.MaterialOf(mesh.material[t]);
     s.albedo = Albedo(*s.material, colored ? Vec3f(col) : Vec3f(-1, -1, -1));
@@ -245,7 +258,8 @@ Surface SurfaceAt(const ReferenceMesh& mesh, const Scene& scene, uint32_t t, con
 
 std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const Scene& scene,
                                                   int n, uint64_t seed) {
-    if (n < 1) UsageError("--points must be at least 1");
+    if (n < 1)
+        UsageError("--points must be at least 1");
     CheckMaterials(mesh, scene);
     std::vector<double> cdf(mesh.triangles.size());
     double total = 0;
@@ -256,14 +270,16 @@ std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, con
         total += std::isfinite(a) ? a : 0;
         cdf[t] = total;
     }
-    if (!(total > 0)) InputError({"mesh"}, "the mesh has no area to place reference points on");
-    std::vector<ReferencePoint> points(size_t(n));
+    if (!(total > 0))
+        InputError({"mesh"}, "the mesh has no area to place reference points on");
+    std::vector<ReferencePoint> points(static_cast<size_t>(n));
     for (int i = 0; i < n; ++i) {
         Rng rng(seed, uint64_t(i), ~uint64_t(0));
         const double x = rng.Uniform() * total;
         size_t t = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
         t = std::min(t, cdf.size() - 1);
-        while (t > 0 && cdf[t] == cdf[t - 1]) --t;  // never a zero-area triangle
+        while (t > 0 && cdf[t] == cdf[t - 1])
+            --t;  // never a zero-area triangle
         const double su = std::sqrt(rng.Uniform()), v = rng.Uniform();
         const double b[3] = {1 - su, su * (1 - v), su * v};
         const Surface s = SurfaceAt(mesh, scene, uint32_t(t), b);
@@ -273,8 +289,9 @@ std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, con
         p.local_triangle = mesh.local_triangle[t];
         p.face_id = t < mesh.face_id.size() ? mesh.face_id[t] : stream::kNoId;
         for (int k = 0; k < 3; ++k) {
-            const uint32_t v = mesh.triangles[t][size_t(k)];
-            p.vertex_ids[size_t(k)] = v < mesh.vertex_id.size() ? mesh.vertex_id[v] : stream::kNoId;
+            const uint32_t vk = mesh.triangles[t][size_t(k)];
+            p.vertex_ids[size_t(k)] =
+                vk < mesh.vertex_id.size() ? mesh.vertex_id[vk] : stream::kNoId;
         }
         p.barycentric = Vec3f(float(b[0]), float(b[1]), float(b[2]));
         p.uv = s.uv;
@@ -297,11 +314,13 @@ struct ReferenceTracer::Impl {
     mutable std::atomic<uint64_t> rays{0};
 
     Impl(const ReferenceMesh& m, const Scene& s)
-        : mesh(m), scene(s), vis(VisibilityOptions{.compact = false,
-                                                   .robust = true,
-                                                   .quality = BuildQuality::kHigh,
-                                                   .method = TraceMethod::kSingle,
-                                                   .coherent = false}) {
+        : mesh(m),
+          scene(s),
+          vis(VisibilityOptions{.compact = false,
+                                .robust = true,
+                                .quality = BuildQuality::kHigh,
+                                .method = TraceMethod::kSingle,
+                                .coherent = false}) {
         CheckMaterials(mesh, scene);
         std::vector<float> pos;
         pos.reserve(mesh.position.size() * 3);
@@ -313,18 +332,21 @@ struct ReferenceTracer::Impl {
         }
         std::vector<uint32_t> idx;
         idx.reserve(mesh.triangles.size() * 3);
-        for (const auto& f : mesh.triangles) idx.insert(idx.end(), f.begin(), f.end());
+        for (const auto& f : mesh.triangles)
+            idx.insert(idx.end(), f.begin(), f.end());
         vis.AddTriangles(pos, idx, "reference mesh");
         vis.Commit();
         eps = mesh.position.empty() ? 1e-6 : 1e-5 * Length(hi - lo) + 1e-30;
 
         for (const PolygonLight& pl : scene.lights) {
             Emitter e = MakePolygonEmitter(pl);
-            if (e.area > 0 && MaxOf(e.radiance) > 0) emitters.push_back(std::move(e));
+            if (e.area > 0 && MaxOf(e.radiance) > 0)
+                emitters.push_back(std::move(e));
         }
         for (size_t t = 0; t < mesh.triangles.size(); ++t) {
             const Material& mat = scene.MaterialOf(mesh.material[t]);
-            if (!mat.emissive()) continue;
+            if (!mat.emissive())
+                continue;
             const auto& f = mesh.triangles[t];
             Emitter e;
             e.triangle = true;
@@ -335,7 +357,8 @@ struct ReferenceTracer::Impl {
             e.area = Length(c) / 2;
             e.normal = Normalize(c);
             e.radiance = Vec3d(mat.emission);
-            if (e.area > 0) emitters.push_back(std::move(e));
+            if (e.area > 0)
+                emitters.push_back(std::move(e));
         }
         double total = 0;
         for (const Emitter& e : emitters) {
@@ -346,9 +369,11 @@ struct ReferenceTracer::Impl {
 
     Vec3d SkyRadiance(const Vec3d& w) const {
         const Sky& sky = scene.sky;
-        if (sky.type == Sky::Type::None) return {};
+        if (sky.type == Sky::Type::None)
+            return {};
         const double c = Dot(Normalize(sky.up), w);
-        if (c <= 0) return {};
+        if (c <= 0)
+            return {};
         return sky.type == Sky::Type::Overcast ? sky.radiance * ((1 + 2 * c) / 3) : sky.radiance;
     }
 
@@ -356,7 +381,8 @@ struct ReferenceTracer::Impl {
     // e is not null, vector irradiance. Light below the plane of ng is blocked.
     void Direct(const Vec3d& x, const Vec3d& n, const Vec3d& ng, Rng& rng, Vec3d& irr,
                 Vec3d* e) const {
-        if (emitters.empty()) return;
+        if (emitters.empty())
+            return;
         const double total = emitter_cdf.back();
         const size_t j = std::min(
             size_t(std::upper_bound(emitter_cdf.begin(), emitter_cdf.end(), rng.Uniform() * total) -
@@ -365,26 +391,33 @@ struct ReferenceTracer::Impl {
         const Emitter& em = emitters[j];
         const double pick = (emitter_cdf[j] - (j ? emitter_cdf[j - 1] : 0)) / total;
         Vec3d y;
-        if (!em.Sample(rng, y)) return;
+        if (!em.Sample(rng, y))
+            return;
         const Vec3d o = x + ng * eps;
         const Vec3d d = y - o;
         const double d2 = Dot(d, d);
-        if (!(d2 > 0)) return;
+        if (!(d2 > 0))
+            return;
         const Vec3d w = d / std::sqrt(d2);
-        if (Dot(w, ng) <= 0) return;
+        if (Dot(w, ng) <= 0)
+            return;
         double cos_l = -Dot(w, em.normal);
-        if (em.two_sided) cos_l = std::abs(cos_l);
-        if (cos_l <= 0) return;
-        Segment s{float(o.x), float(o.y), float(o.z), 0, float(d.x), float(d.y), float(d.z),
-                  1.0f - 1e-4f};
+        if (em.two_sided)
+            cos_l = std::abs(cos_l);
+        if (cos_l <= 0)
+            return;
+        Segment s{float(o.x), float(o.y), float(o.z), 0,
+                  float(d.x), float(d.y), float(d.z), 1.0f - 1e-4f};
         uint8_t occluded = 0;
         vis.Occluded({&s, 1}, {&occluded, 1});
         rays.fetch_add(1, std::memory_order_relaxed);
-        if (occluded) return;
+        if (occluded)
+            return;
         const double g = cos_l / d2 * em.area / pick;
         irr += em.radiance * (g * std::max(0.0, Dot(n, w)));
         if (e)
-            for (int c = 0; c < 3; ++c) e[c] += w * (em.radiance[c] * g);
+            for (int c = 0; c < 3; ++c)
+                e[c] += w * (em.radiance[c] * g);
     }
 
     // Radiance arriving at o from direction w, without the emission of sampled emitters
@@ -392,8 +425,8 @@ struct ReferenceTracer::Impl {
     Vec3d Incoming(Vec3d o, Vec3d w, Rng& rng, const ReferenceOptions& opt) const {
         Vec3d throughput(1, 1, 1), radiance{};
         for (int depth = 0; depth < opt.max_depth; ++depth) {
-            Segment s{float(o.x), float(o.y), float(o.z), 0, float(w.x), float(w.y), float(w.z),
-                      std::numeric_limits<float>::infinity()};
+            Segment s{float(o.x), float(o.y), float(o.z), 0,
+                      float(w.x), float(w.y), float(w.z), std::numeric_limits<float>::infinity()};
             Hit h;
             vis.Intersect({&s, 1}, {&h, 1});
             rays.fetch_add(1, std::memory_order_relaxed);
@@ -403,18 +436,21 @@ struct ReferenceTracer::Impl {
             }
             const double b[3] = {1.0 - double(h.u) - double(h.v), double(h.u), double(h.v)};
             const Surface sf = SurfaceAt(mesh, scene, h.prim_id, b);
-            if (Dot(sf.geometric_normal, w) >= 0) break;  // the back of a surface is black
+            if (Dot(sf.geometric_normal, w) >= 0)
+                break;  // the back of a surface is black
             throughput = Mul(throughput, sf.albedo);
             Vec3d irr{};
             Direct(sf.position, sf.normal, sf.geometric_normal, rng, irr, nullptr);
             radiance += Mul(throughput, irr) * (1 / kPi);
             if (depth + 1 >= opt.roulette_depth) {
                 const double q = std::min(0.95, MaxOf(throughput));
-                if (!(rng.Uniform() < q)) break;
+                if (!(rng.Uniform() < q))
+                    break;
                 throughput = throughput / q;
             }
             w = CosineSample(sf.normal, rng.Uniform(), rng.Uniform());
-            if (Dot(w, sf.geometric_normal) <= 0) break;  // below its own plane: blocked
+            if (Dot(w, sf.geometric_normal) <= 0)
+                break;  // below its own plane: blocked
             o = sf.position + sf.geometric_normal * eps;
         }
         return radiance;
@@ -433,11 +469,13 @@ struct ReferenceTracer::Impl {
                             : UniformHemisphere(p.geometric_normal, rng.Uniform(), rng.Uniform());
         const double cos_n = std::max(0.0, Dot(p.normal, w));
         const double cos_g = Dot(p.geometric_normal, w);
-        if (cos_g <= 0) return;
+        if (cos_g <= 0)
+            return;
         const double pdf = 0.5 * cos_n / kPi + 0.5 / (2 * kPi);
         const Vec3d l = Incoming(p.position + p.geometric_normal * eps, w, rng, opt);
         irr += l * (cos_n / pdf);
-        for (int c = 0; c < 3; ++c) e[c] += w * (l[c] / pdf);
+        for (int c = 0; c < 3; ++c)
+            e[c] += w * (l[c] / pdf);
     }
 };
 
@@ -480,7 +518,8 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
                 double v[12];
                 for (int c = 0; c < 3; ++c) {
                     v[c] = kPi * p.emission[c] + p.albedo[c] * irr[c];
-                    for (int k = 0; k < 3; ++k) v[3 + 3 * c + k] = e[c][k];
+                    for (int k = 0; k < 3; ++k)
+                        v[3 + 3 * c + k] = e[c][k];
                 }
                 for (int k = 0; k < 12; ++k) {
                     a.sum[k] += v[k];
@@ -509,14 +548,15 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
         last_round = std::chrono::duration<double>(Clock::now() - tr).count();
         if (round == 0) {
             double s2 = 0;
-            for (const auto& p : points) s2 += Dot(p.b, p.b);
+            for (const auto& p : points)
+                s2 += Dot(p.b, p.b);
             floor = opt.floor_fraction * std::sqrt(s2 / double(points.size()));
         }
         uint64_t done = 0, open = 0;
         for (size_t i = 0; i < points.size(); ++i) {
             const ReferencePoint& p = points[i];
-            const bool ok = Length(p.b_se) <=
-                            opt.target_relative_error * std::max(Length(p.b), floor);
+            const bool ok =
+                Length(p.b_se) <= opt.target_relative_error * std::max(Length(p.b), floor);
             if (ok) {
                 ++done;
             } else if (p.samples < opt.max_samples) {
@@ -525,7 +565,8 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
             }
         }
         st.converged = done;
-        if (progress) progress(round, done);
+        if (progress)
+            progress(round, done);
         const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
         if (open == 0) {
             st.stop = done == points.size() ? "converged" : "max_samples";
@@ -537,7 +578,8 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
             break;
         }
     }
-    for (const Accum& a : acc) st.paths += a.n;
+    for (const Accum& a : acc)
+        st.paths += a.n;
     st.rays = impl_->rays;
     st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return st;

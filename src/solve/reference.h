@@ -21,16 +21,16 @@
 // the points whose standard error is still above the target, up to `max_samples`.
 #pragma once
 
+#include "core/vec.h"
+#include "solve/scene.h"
+#include "stream/bake_dir.h"
+
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "core/vec.h"
-#include "solve/scene.h"
-#include "stream/bake_dir.h"
 
 namespace mebake::solve {
 
@@ -59,9 +59,9 @@ struct ReferenceOptions {
     // (so dark points, which weigh little in a relative RMS, do not take all the time).
     double target_relative_error = 0.01;
     double floor_fraction = 0.25;
-    double time_limit = 0;     // seconds; 0 = none (checked between rounds)
-    int roulette_depth = 3;    // bounces before Russian roulette starts
-    int max_depth = 256;       // hard cap; the throughput left there is < 0.95^253
+    double time_limit = 0;   // seconds; 0 = none (checked between rounds)
+    int roulette_depth = 3;  // bounces before Russian roulette starts
+    int max_depth = 256;     // hard cap; the throughput left there is < 0.95^253
 };
 
 struct ReferencePoint {
@@ -88,7 +88,7 @@ struct ReferenceStats {
     uint64_t paths = 0, rays = 0;
     uint64_t converged = 0;  // points whose standard error met the target
     double seconds = 0;
-    std::string stop;        // "converged", "max_samples" or "time_limit"
+    std::string stop;  // "converged", "max_samples" or "time_limit"
 };
 
 class ReferenceTracer {

@@ -4,17 +4,17 @@
 // (solve/probe.h) on a hand-made solved bake.
 #include "solve/reference.h"
 
-#include <gtest/gtest.h>
-
-#include <cmath>
-#include <numbers>
-
+#include "bake_fixture.h"
 #include "core/parallel.h"
 #include "solve/bake_view.h"
 #include "solve/polygon_light.h"
 #include "solve/probe.h"
 #include "solve/sky.h"
-#include "bake_fixture.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
 
 namespace mebake::solve {
 namespace {
@@ -124,12 +124,11 @@ ReferenceMesh InwardCube() {
     ReferenceMesh m;
     const Vec3f v[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                         {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-    AddQuad(m, v[0], v[3], v[2], v[1]);  // z = 0, normal +z (inward)
-    AddQuad(m, v[4], v[5], v[6], v[7]);  // z = 1, normal -z
-    AddQuad(m, v[0], v[1], v[5], v[4]);  // y = 0, normal +y
-    AddQuad(m, v[3], v[7], v[6], v[2]);  // y = 1, normal -y
-    AddQuad(m, v[0], v[4], v[7], v[3]);  // x = 0, normal +x
-    AddQuad(m, v[1], v[2], v[6], v[5]);  // x = 1, normal -x
+    // Each face listed counter-clockwise seen from outside, added reversed (front = inside).
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                             {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+    for (const auto& f : faces)
+        AddQuad(m, v[f[3]], v[f[2]], v[f[1]], v[f[0]]);
     return m;
 }
 
@@ -137,7 +136,8 @@ TEST(ReferenceTest, FurnaceMatchesGeometricSeries) {
     const ReferenceMesh mesh = InwardCube();
     for (int k = 0; k < 6; ++k) {  // the normals really point inwards
         const auto& f = mesh.triangles[size_t(2 * k)];
-        const Vec3f centre = (mesh.position[f[0]] + mesh.position[f[1]] + mesh.position[f[2]]) / 3.f;
+        const Vec3f centre =
+            (mesh.position[f[0]] + mesh.position[f[1]] + mesh.position[f[2]]) / 3.f;
         EXPECT_GT(Dot(mesh.normal[f[0]], Vec3f(0.5f, 0.5f, 0.5f) - centre), 0);
     }
     const float rho = 0.7f;
@@ -224,7 +224,8 @@ TEST(ReferenceTest, BakeDirectoryReferenceAndProbe) {
     const auto values = ProbeSolution(view, sites);
     for (size_t i = 0; i < points.size(); ++i) {
         const Vec3f expected = testing::ExpectedB(opt, int(points[i].chart), points[i].uv.x);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(values[i].b[c], expected[c], 1e-4f * expected[c]);
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(values[i].b[c], expected[c], 1e-4f * expected[c]);
     }
     sites.push_back({0, 99, Vec3f(1, 0, 0)});
     EXPECT_THROW(ProbeSolution(view, sites), Error);
