@@ -22,6 +22,7 @@ CASES="plane furnace cornell cornell-tiny bunny igea bunny-2lights igea-2lights"
 REF_TIME=300
 WORK="$ROOT/build/bench-accuracy"
 RESULTS=1
+CMD="bash bench/accuracy.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
     --points) POINTS="$2"; shift 2 ;;
@@ -35,7 +36,6 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$MEBAKE" ] || { echo "build mebake first: $MEBAKE" >&2; exit 1; }
 mkdir -p "$WORK"
-CMD="bash bench/accuracy.sh $*"
 
 # ---- analytic scenes, written here -------------------------------------------------
 make_plane() {  # 40 x 40 grid on z = 0, [-4, 4]^2; a unit square light at height 1
@@ -64,13 +64,13 @@ V, F = {}, []
 def vid(p):
     if p not in V: V[p] = len(V) + 1
     return V[p]
-def face(o, a, b):  # o + s a + t b, normal a x b (inward by construction below)
+def face(o, a, b):  # o + s a + t b; a x b points outwards, triangles wound inwards
     for j in range(n):
         for i in range(n):
             q = [tuple(o[k] + (i + di) / n * a[k] + (j + dj) / n * b[k] for k in range(3))
                  for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1))]
             ids = [vid(tuple(round(c, 9) for c in p)) for p in q]
-            F.append((ids[0], ids[1], ids[2])); F.append((ids[0], ids[2], ids[3]))
+            F.append((ids[0], ids[2], ids[1])); F.append((ids[0], ids[3], ids[2]))
 face((0, 0, 0), (0, 1, 0), (1, 0, 0)); face((0, 0, 1), (1, 0, 0), (0, 1, 0))
 face((0, 0, 0), (1, 0, 0), (0, 0, 1)); face((0, 1, 0), (0, 0, 1), (1, 0, 0))
 face((0, 0, 0), (0, 0, 1), (0, 1, 0)); face((1, 0, 0), (0, 1, 0), (0, 0, 1))

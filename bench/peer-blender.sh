@@ -23,6 +23,7 @@ TOLS="0.1 0.05 0.02"
 POINTS=2000
 WORK="$ROOT/build/bench-peer"
 RESULTS=1
+CMD="bash bench/peer-blender.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
     --tris) TRIS="$2"; shift 2 ;;
@@ -40,7 +41,6 @@ if ! command -v blender > /dev/null; then
 fi
 $PY -c "import numpy" 2> /dev/null || { echo "peer-blender: needs python3-numpy; skipped" >&2; exit 0; }
 [ -x "$MEBAKE" ] || { echo "build mebake first" >&2; exit 1; }
-CMD="bash bench/peer-blender.sh $*"
 mkdir -p "$WORK"
 MESH="$WORK/rock.ply"
 [ -f "$MESH" ] || $PY "$PEERS/blender_gen_rock.py" --tris "$TRIS" --out "$MESH"

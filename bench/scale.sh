@@ -14,6 +14,7 @@ MKSCAN="${MKSCAN:-$ROOT/build/tools/mkscan}"
 SIZES="100000 400000 1000000 4000000 16000000"
 WORK="$ROOT/build/bench-scale"
 RESULTS=1
+CMD="bash bench/scale.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
     --sizes) SIZES="$2"; shift 2 ;;
@@ -24,7 +25,6 @@ while [ $# -gt 0 ]; do
 done
 [ -x "$MEBAKE" ] && [ -x "$MKSCAN" ] || { echo "build mebake and mkscan first" >&2; exit 1; }
 mkdir -p "$WORK"
-CMD="bash bench/scale.sh $*"
 TSV="$WORK/scale.tsv"
 [ -f "$TSV" ] || printf "triangles\tstage\tseconds\tpeak_kib\tstatus\n" > "$TSV"
 
