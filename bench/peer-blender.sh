@@ -113,7 +113,7 @@ print("Machine: %s, %d cores (shared with other jobs), Debian Blender %s. Date: 
       "bilinear at the point's smart-UV coordinate (points on repaired triangles skipped).\n"
       "mebake time = ingest + solve + export of the light map; Blender time = the whole blender\n"
       "process (import, smart UV, bake, save). Peak RSS: /usr/bin/time -v, largest of the stages.\n" %
-      (cpu, os.cpu_count(), json.load(open(glob.glob(work + "/blender*.json")[0])).get("blender", "?"),
+      (cpu, os.cpu_count(), json.load(open(glob.glob(work + "/blender[0-9]*.json")[0])).get("blender", "?"),
        datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M"), cmd, tris, ref["triangles"],
        len(ref["points"]), 100 * json.load(open(glob.glob(work + "/mebake.*.err.json")[0]))["error"]["reference_noise_rms"]))
 print("| tool | setting | wall s | CPU s | peak RSS MiB | rel RMS of B | corrected | max | points |")
