@@ -96,7 +96,7 @@ make_two_lights() {  # $1 bake dir, $2 output scene file: key + fill squares, no
   python3 - "$1" "$2" <<'PY'
 import json, math, sys
 m = json.load(open(sys.argv[1] + "/manifest.json"))
-lo, hi = m["bbox_min"], m["bbox_max"]
+lo, hi = m["bbox"]
 c = [(lo[k] + hi[k]) / 2 for k in range(3)]
 diag = math.sqrt(sum((hi[k] - lo[k]) ** 2 for k in range(3)))
 def norm(v):
@@ -155,9 +155,12 @@ for c in $CASES; do
 done
 
 # ---- table ---------------------------------------------------------------------------
-python3 - "$WORK" "$CASES" "$ORDERS" "$CMD" "$POINTS" > "$WORK/accuracy.md" <<'PY'
+# Every case measured in WORK so far (a later run of some cases keeps the others' rows).
+ALL_CASES="plane furnace cornell cornell-tiny bunny igea bunny-2lights igea-2lights"
+python3 - "$WORK" "$ALL_CASES" "0 1 2 3" "$CMD" "$POINTS" > "$WORK/accuracy.md" <<'PY'
 import json, os, sys, platform, datetime, subprocess
 work, cases, orders, cmd, points = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4], sys.argv[5]
+cases = [c for c in cases if os.path.isdir(os.path.join(work, c))]
 cpu = "?"
 try:
     for l in open("/proc/cpuinfo"):
@@ -177,10 +180,11 @@ print("| case | triangles | reference: noise rms, time | M | rms | corr | max | 
 print("|---|---:|---|---:|---:|---:|---:|---:|---|---:|---:|")
 for c in cases:
     d = os.path.join(work, c)
+    orders_here = [m for m in orders if os.path.exists("%s/solve%s.time" % (d, m))]
     try: ref = json.load(open(d + "/ref.json"))
     except (OSError, ValueError): print("| %s | failed (no reference) |||||||||" % c); continue
     rt = open(d + "/ref.time").read().split()
-    for m in orders:
+    for m in orders_here:
         try:
             e = json.load(open("%s/cmp%s.json" % (d, m)))["error"]
             ex = json.load(open("%s/export%s.json" % (d, m)))
