@@ -3,7 +3,10 @@
 # stdin, `mkscan -n N | mebake ingest -`, then `mebake solve` (default rig) and
 # `mebake export` (light map + stats), each under /usr/bin/time -v.
 #
-#   bash bench/scale.sh [--sizes "100000 1000000 ..."] [--work DIR] [--no-results]
+#   bash bench/scale.sh [--sizes "100000 1000000 ..."] [--timeout S] [--work DIR] [--no-results]
+#
+# Each stage runs under `nice -n 5` and `timeout S` (default 1200 s); a stage that times out
+# is recorded as such (and the later stages of that size are skipped).
 #
 # Writes WORK/scale.tsv, WORK/scale.md, bench/scale.png (log-log; skipped without gnuplot)
 # and the table into bench/RESULTS.md between the "scale:begin/end" markers.
@@ -11,14 +14,16 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 MEBAKE="${MEBAKE:-$ROOT/build/src/app/mebake}"
 MKSCAN="${MKSCAN:-$ROOT/build/tools/mkscan}"
-SIZES="100000 400000 1000000 4000000 16000000"
+SIZES="100000 1000000 4000000 16000000"
 WORK="$ROOT/build/bench-scale"
 RESULTS=1
+TIMEOUT=1200
 CMD="bash bench/scale.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
     --sizes) SIZES="$2"; shift 2 ;;
     --work) WORK="$2"; shift 2 ;;
+    --timeout) TIMEOUT="$2"; shift 2 ;;
     --no-results) RESULTS=0; shift ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
@@ -30,8 +35,10 @@ TSV="$WORK/scale.tsv"
 
 measure() {  # measure N STAGE CMD... : appends a row (wall seconds, peak RSS)
   local n="$1" stage="$2"; shift 2
-  local log="$WORK/$n.$stage.time" st=ok
-  if ! /usr/bin/time -v -o "$log" "$@" > "$WORK/$n.$stage.log" 2>&1; then st=failed; fi
+  local log="$WORK/$n.$stage.time" st=ok rc=0
+  /usr/bin/time -v -o "$log" timeout "$TIMEOUT" nice -n 5 "$@" > "$WORK/$n.$stage.log" 2>&1 || rc=$?
+  [ "$rc" = 0 ] || st=failed
+  [ "$rc" = 124 ] && st=timeout
   local wall rss
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/{n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$log")
   rss=$(awk -F': ' '/Maximum resident set size/{print $2}' "$log")
@@ -46,8 +53,12 @@ for n in $SIZES; do
   d="$WORK/s$n.mebake"
   rm -rf "$d"
   measure "$n" ingest bash -c "'$MKSCAN' -n $n | '$MEBAKE' ingest - -o '$d' --force"
-  measure "$n" solve "$MEBAKE" solve "$d"
-  measure "$n" export "$MEBAKE" export "$d" --lightmap "$WORK/s$n.exr" --stats "$WORK/s$n.stats.json" --force
+  if [ "$(tail -1 "$TSV" | cut -f5)" = ok ]; then
+    measure "$n" solve "$MEBAKE" solve "$d"
+    if [ "$(tail -1 "$TSV" | cut -f5)" = ok ]; then
+      measure "$n" export "$MEBAKE" export "$d" --lightmap "$WORK/s$n.exr" --stats "$WORK/s$n.stats.json" --force
+    fi
+  fi
   du -sk "$d" | awk -v n="$n" '{print n "\t" $1}' >> "$WORK/disk.tsv"
   rm -rf "$d" "$WORK"/s$n.*.exr "$WORK/s$n.exr"
 done
@@ -77,7 +88,7 @@ for n in sizes:
     for s in stages:
         r = t.get((n, s))
         if not r: cells += ["-", "-"]; continue
-        bad = "" if r[4] == "ok" else " (failed)"
+        bad = "" if r[4] == "ok" else " (%s)" % r[4]
         cells += ["%.1f%s" % (float(r[2]), bad), "%.0f" % (int(r[3]) / 1024)]
     print("| %s | %s |" % (format(n, ","), " | ".join(cells)))
 base = [n for n in sizes if n == 1000000]
