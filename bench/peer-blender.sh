@@ -52,9 +52,12 @@ cat > "$WORK/scene.json" <<'JS'
  "sky": {"type": "none"}}
 JS
 TSV="$WORK/peer.tsv"
-printf "tool\tsetting\tstage\tseconds\tpeak_kib\tcpu_s\n" > "$TSV"
+# Steps already measured in WORK (a row in peer.tsv) are kept and not run again.
+[ -f "$TSV" ] || printf "tool\tsetting\tstage\tseconds\tpeak_kib\tcpu_s\n" > "$TSV"
+done_before() { grep -q -P "^$1\t$2\t$3\t" "$TSV"; }
 timed() {  # timed TOOL SETTING STAGE CMD...
   local tool="$1" setting="$2" stage="$3"; shift 3
+  if done_before "$tool" "$setting" "$stage"; then echo "kept: $tool $setting $stage" >&2; return 0; fi
   local log="$WORK/$tool.$setting.$stage.time"
   /usr/bin/time -v -o "$log" "$@" > "$WORK/$tool.$setting.$stage.log" 2>&1
   awk -F': ' -v t="$tool" -v s="$setting" -v g="$stage" '
@@ -73,21 +76,25 @@ timed mebake all ingest "$MEBAKE" ingest "$MESH" -o "$D" --force
 for t in $TOLS; do
   timed mebake "tol$t" solve "$MEBAKE" solve "$D" --scene "$WORK/scene.json" --order 2 --tolerance "$t"
   timed mebake "tol$t" export "$MEBAKE" export "$D" --lightmap "$WORK/mebake.exr" --force
-  "$MEBAKE" -q compare "$D" "$WORK/ref.json" -o "$WORK/mebake.tol$t.err.json"
+  [ -f "$WORK/mebake.tol$t.err.json" ] || "$MEBAKE" -q compare "$D" "$WORK/ref.json" -o "$WORK/mebake.tol$t.err.json"
 done
 for s in $SAMPLES; do
   timed blender "spp$s" bake blender -b --factory-startup -t 2 --python-exit-code 1 \
     --python "$PEERS/blender_bake.py" -- "$MESH" --out "$WORK/blender$s.exr" --json "$WORK/blender$s.json" \
     --res 1024 --samples "$s" --bounces 16 --threads 2 --importer numpy --dump-uv "$WORK/uv$s.npy"
-  blender -b --factory-startup --python-exit-code 1 --python "$ROOT/bench/peer-blender-eval.py" -- \
+  [ -f "$WORK/blender.spp$s.err.json" ] || blender -b --factory-startup --python-exit-code 1 --python "$ROOT/bench/peer-blender-eval.py" -- \
     "$WORK/ref.json" "$MESH" "$WORK/uv$s.npy" "$WORK/blender$s.exr" 0.7 "$WORK/blender.spp$s.err.json" \
     > "$WORK/eval$s.log" 2>&1 || { echo "evaluation failed, see $WORK/eval$s.log" >&2; exit 1; }
 done
 
-$PY - "$WORK" "$CMD" "$TRIS" > "$WORK/peer.md" <<'PY'
+$PY - "$WORK" "$CMD" "$TRIS" "$SAMPLES" "$TOLS" > "$WORK/peer.md" <<'PY'
 import json, os, sys, platform, datetime, glob
 work, cmd, tris = sys.argv[1], sys.argv[2], sys.argv[3]
 rows = [l.rstrip("\n").split("\t") for l in open(work + "/peer.tsv")][1:]
+samples_run = set("spp" + x for x in sys.argv[4].split())
+tols_run = set("tol" + x for x in sys.argv[5].split())
+rows = [r for r in rows if r[0] != "blender" or r[1] in samples_run]
+rows = [r for r in rows if r[0] != "mebake" or r[1] == "all" or r[1] in tols_run]
 cpu = "?"
 for l in open("/proc/cpuinfo"):
     if l.startswith("model name"): cpu = l.split(":", 1)[1].strip(); break
