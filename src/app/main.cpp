@@ -9,6 +9,7 @@
 
 #include "app/commands.h"
 #include "app/export_commands.h"
+#include "app/reference_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "io/mesh_format.h"
@@ -126,6 +127,35 @@ int main(int argc, char** argv) {
     sol_cmd->add_flag("-f,--force", sol.force, "Discard checkpoints and solve from the start")
         ->excludes(sol_resume);
 
+    // reference, compare  (#include "app/reference_commands.h")
+    mebake::app::ReferenceCommand ref;
+    auto* ref_cmd = app.add_subcommand(
+        "reference", "Independent path-traced radiosity B and vector irradiance E, with standard\n"
+                     "errors, at random surface points of a bake directory (docs/accuracy.md);\n"
+                     "a solved directory also gets its baked B at the same points and the error.");
+    ref_cmd->add_option("dir", ref.dir, "Ingested (or solved) bake directory")->required();
+    ref_cmd->add_option("--scene", ref.scene_file, "Scene file (default: the solve's, else the default rig)");
+    ref_cmd->add_option("--points", ref.points, "Surface points (area-weighted)")->capture_default_str()
+        ->check(CLI::Range(1, 10000000));
+    ref_cmd->add_option("--seed", ref.seed, "Seed of the points and the paths")->capture_default_str();
+    ref_cmd->add_option("--min-samples", ref.min_samples, "Paths per point in the first round")->capture_default_str()
+        ->check(CLI::Range(uint64_t(2), uint64_t(1) << 40));
+    ref_cmd->add_option("--samples", ref.max_samples, "Most paths per point")->capture_default_str()
+        ->check(CLI::Range(uint64_t(2), uint64_t(1) << 40));
+    ref_cmd->add_option("--target", ref.target, "Relative standard error of B to stop at")->capture_default_str()
+        ->check(CLI::Range(1e-6, 1.0));
+    ref_cmd->add_option("--time-limit", ref.time_limit, "Stop doubling samples after about this many seconds");
+    ref_cmd->add_option("--threads", ref.threads, "Worker threads (0: all cores)")->capture_default_str();
+    ref_cmd->add_option("-o,--output", ref.output, "JSON output ('-' = stdout)")->capture_default_str();
+    mebake::app::CompareCommand cmp;
+    auto* cmp_cmd = app.add_subcommand(
+        "compare", "Score a solved bake directory against a `mebake reference` JSON: relative RMS\n"
+                   "and max error of B at the reference's points (docs/accuracy.md).");
+    cmp_cmd->add_option("dir", cmp.dir, "Solved bake directory")->required();
+    cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`")->required();
+    cmp_cmd->add_option("-o,--output", cmp.output, "JSON summary ('-' = stdout)")->capture_default_str();
+    cmp_cmd->add_flag("--points", cmp.points, "Also list each point's reference and baked B");
+
     // export  (#include "app/export_commands.h")
     mebake::app::ExportCommand exp;
     auto* exp_cmd = app.add_subcommand(
@@ -222,6 +252,8 @@ int main(int argc, char** argv) {
             return mebake::app::RunBake(bk);
         }
         if (*exp_cmd) return mebake::app::RunExport(exp);
+        if (*ref_cmd) return mebake::app::RunReference(ref);
+        if (*cmp_cmd) return mebake::app::RunCompare(cmp);
         if (*ren_cmd) return mebake::app::RunRender(ren);
         if (*conv_cmd) {
             conv.in_format = ToFormat(conv_in_format);
