@@ -1,13 +1,13 @@
 #include "solve/direct.h"
 
-#include <algorithm>
-#include <cmath>
-#include <numbers>
-
 #include "core/check.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/visibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 
 namespace mebake::solve {
 
@@ -36,8 +36,10 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
         const Vec3d& a = poly[k];
         const Vec3d& b = poly[(k + 1) % m];
         double da = Dot(a - x, n), db = Dot(b - x, n);
-        if (da >= 0) out.push_back(a);
-        if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
+        if (da >= 0)
+            out.push_back(a);
+        if ((da >= 0) != (db >= 0))
+            out.push_back(a + (b - a) * (da / (da - db)));
     }
     return out;
 }
@@ -45,7 +47,8 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
 DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
                          const VisibilityScene& vis, float ray_offset, float scene_size)
     : vis_(vis), sky_(scene.sky), offset_(ray_offset), far_(scene_size * 100) {
-    const int per_tri = std::max(2, int(std::lround(std::sqrt(double(settings.light_samples)))));
+    const int per_tri =
+        std::max(2, int(std::ceil(std::sqrt(double(settings.light_samples)) - 1e-9)));
     for (const auto& pl : scene.lights) {
         Light l;
         l.vertices = pl.vertices;
@@ -53,33 +56,31 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
         l.two_sided = pl.two_sided;
         l.normal = PolygonNormal(pl.vertices);
         l.area = PolygonArea(pl.vertices);
-        if (l.area <= 0) continue;
+        if (l.area <= 0)
+            continue;
         Vec3d centre{};
-        for (const auto& v : l.vertices) centre += v;
+        for (const auto& v : l.vertices)
+            centre += v;
         centre = centre / double(l.vertices.size());
         // Classification points: vertices pulled 1% toward the centre, and the centre.
-        for (const auto& v : l.vertices) l.classify.push_back(Vec3f(v + (centre - v) * 0.01));
+        for (const auto& v : l.vertices)
+            l.classify.push_back(Vec3f(v + (centre - v) * 0.01));
         l.classify.push_back(Vec3f(centre));
-        // Cells: each fan triangle cut into per_tri^2 congruent triangles.
+        // Penumbra grid: per_tri cells per side of each fan triangle, a power of two so
+        // that cells halve down to it.
+        l.grid = 1;
+        while (l.grid < per_tri && l.grid < 64)
+            l.grid *= 2;
+        const int g1 = l.grid + 1;
         for (size_t t = 0; t + 2 < l.vertices.size(); ++t) {
-            const double k = per_tri;
-            auto at = [&](int a, int b) { return PolygonPoint(l.vertices, t, a / k, b / k); };
-            for (int a = 0; a < per_tri; ++a) {
-                for (int b = 0; a + b < per_tri; ++b) {
-                    l.cells.push_back({at(a, b), at(a + 1, b), at(a, b + 1)});
-                    if (a + b + 2 <= per_tri) l.cells.push_back({at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)});
+            for (int b = 0; b < g1; ++b) {
+                for (int a = 0; a < g1; ++a) {
+                    const Vec3d p =
+                        PolygonPoint(l.vertices, t, double(a) / l.grid, double(b) / l.grid);
+                    l.grid_pos.push_back(p);
+                    l.grid_target.push_back(Vec3f(p + (centre - p) * 0.01));
                 }
             }
-        }
-        // One sample per cell at a fixed pseudo-random point (an R2 low-discrepancy
-        // sequence): a shadow edge parallel to the cell rows then cuts samples at varied
-        // offsets, so the misclassified parts cancel instead of adding up along the edge.
-        for (size_t c = 0; c < l.cells.size(); ++c) {
-            double a = std::fmod(0.5 + 0.7548776662466927 * double(c + 1), 1.0);
-            double b = std::fmod(0.5 + 0.5698402909980532 * double(c + 1), 1.0);
-            if (a + b > 1) a = 1 - a, b = 1 - b;
-            const auto& t = l.cells[c];
-            l.samples.push_back(Vec3f(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b));
         }
         lights_.push_back(std::move(l));
     }
@@ -117,6 +118,149 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
+// Penumbra of one light at the given points. Per point, the light's fan triangles start as
+// 2 x 2 grids of cells whose corners are tested with one ray each (the classification rays
+// give the light's own vertices); a cell whose corners agree is taken as wholly visible or
+// hidden, one whose corners disagree is split in four, down to the finest grid, where a mixed
+// cell is visible as one fixed low-discrepancy point in it is. Rays go only where a shadow
+// edge crosses the light, and all points of a level share one Embree batch.
+void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
+                           std::span<const size_t> penumbra, std::span<const uint8_t> classified,
+                           std::vector<Vec3d>* e) const {
+    e->assign(penumbra.size(), Vec3d{});
+    if (penumbra.empty())
+        return;
+    const int g = l.grid, g1 = g + 1;
+    const size_t nt = l.vertices.size() - 2, per_t = size_t(g1) * size_t(g1);
+    const size_t nv = nt * per_t, nk = l.classify.size();
+    const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+    // Vertex states per point: 0 unknown, 1 requested, 2 visible, 3 hidden.
+    std::vector<uint8_t> state(penumbra.size() * nv, 0);
+    auto vidx = [&](size_t t, int a, int b) {
+        return t * per_t + size_t(b) * size_t(g1) + size_t(a);
+    };
+    for (size_t q = 0; q < penumbra.size(); ++q) {
+        uint8_t* st = &state[q * nv];
+        const uint8_t* cls = &classified[q * nk];
+        for (size_t t = 0; t < nt; ++t) {
+            st[vidx(t, 0, 0)] = cls[0] ? 3 : 2;
+            st[vidx(t, g, 0)] = cls[t + 1] ? 3 : 2;
+            st[vidx(t, 0, g)] = cls[t + 2] ? 3 : 2;
+        }
+    }
+    struct Cell {
+        uint32_t q;  // penumbra point
+        uint16_t t;  // fan triangle
+        uint8_t a[3], b[3];
+    };
+    std::vector<Cell> cur, next, finest;
+    const int start = std::min(g, 2);
+    for (uint32_t q = 0; q < penumbra.size(); ++q) {
+        for (size_t t = 0; t < nt; ++t) {
+            const int s = g / start;
+            for (int b = 0; b < g; b += s) {
+                for (int a = 0; a + b < g; a += s) {
+                    cur.push_back({q,
+                                   uint16_t(t),
+                                   {uint8_t(a), uint8_t(a + s), uint8_t(a)},
+                                   {uint8_t(b), uint8_t(b), uint8_t(b + s)}});
+                    if (a + b + 2 * s <= g)
+                        cur.push_back({q,
+                                       uint16_t(t),
+                                       {uint8_t(a + s), uint8_t(a + s), uint8_t(a)},
+                                       {uint8_t(b), uint8_t(b + s), uint8_t(b + s)}});
+                }
+            }
+        }
+    }
+    auto closed_form = [&](const Cell& c) {
+        const Vec3d tri[3] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
+                              l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
+                              l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
+        const ReceiverPoint& rp = points[penumbra[c.q]];
+        const Vec3d x(rp.position), h(rp.horizon);
+        if (Dot(h, h) == 0)
+            return VectorIrradiance(tri, 1.0, x, emission);
+        auto clipped = ClipToHalfSpace(tri, x, h);
+        return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
+    };
+    auto origin = [&](uint32_t q) {
+        const ReceiverPoint& rp = points[penumbra[q]];
+        return rp.vis_point + rp.normal * offset_;
+    };
+    SegmentBatch batch;
+    std::vector<std::pair<uint32_t, uint32_t>> asked;  // (point, vertex)
+    while (!cur.empty()) {
+        batch.Clear();
+        asked.clear();
+        for (const Cell& c : cur) {
+            for (int k = 0; k < 3; ++k) {
+                const size_t v = vidx(c.t, c.a[k], c.b[k]);
+                uint8_t& st = state[c.q * nv + v];
+                if (st != 0)
+                    continue;
+                st = 1;
+                asked.push_back({c.q, uint32_t(v)});
+                batch.AddSegment(origin(c.q), l.grid_target[v]);
+            }
+        }
+        batch.Trace(vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < asked.size(); ++r)
+            state[asked[r].first * nv + asked[r].second] = batch.occluded[r] ? 3 : 2;
+        next.clear();
+        for (const Cell& c : cur) {
+            const uint8_t* st = &state[c.q * nv];
+            const uint8_t s0 = st[vidx(c.t, c.a[0], c.b[0])], s1 = st[vidx(c.t, c.a[1], c.b[1])],
+                          s2 = st[vidx(c.t, c.a[2], c.b[2])];
+            if (s0 == s1 && s1 == s2) {
+                if (s0 == 2)
+                    (*e)[c.q] += closed_form(c);
+                continue;
+            }
+            int side = 0;
+            for (int k = 0; k < 3; ++k)
+                side = std::max({side, std::abs(int(c.a[k]) - int(c.a[(k + 1) % 3])),
+                                 std::abs(int(c.b[k]) - int(c.b[(k + 1) % 3]))});
+            if (side <= 1) {
+                finest.push_back(c);
+                continue;
+            }
+            // Midpoints of the edges 01, 12, 20; the four children.
+            const uint8_t ma[3] = {uint8_t((c.a[0] + c.a[1]) / 2), uint8_t((c.a[1] + c.a[2]) / 2),
+                                   uint8_t((c.a[2] + c.a[0]) / 2)};
+            const uint8_t mb[3] = {uint8_t((c.b[0] + c.b[1]) / 2), uint8_t((c.b[1] + c.b[2]) / 2),
+                                   uint8_t((c.b[2] + c.b[0]) / 2)};
+            next.push_back({c.q, c.t, {c.a[0], ma[0], ma[2]}, {c.b[0], mb[0], mb[2]}});
+            next.push_back({c.q, c.t, {ma[0], c.a[1], ma[1]}, {mb[0], c.b[1], mb[1]}});
+            next.push_back({c.q, c.t, {ma[2], ma[1], c.a[2]}, {mb[2], mb[1], c.b[2]}});
+            next.push_back({c.q, c.t, {ma[0], ma[1], ma[2]}, {mb[0], mb[1], mb[2]}});
+        }
+        std::swap(cur, next);
+    }
+    // Finest mixed cells: one ray to a fixed point of an R2 low-discrepancy sequence indexed
+    // by the cell, so a shadow edge parallel to cell rows cuts samples at varied offsets.
+    batch.Clear();
+    for (const Cell& c : finest) {
+        // The cell in canonical form: up (a,b) (a+1,b) (a,b+1) or down (a+1,b) (a+1,b+1) (a,b+1).
+        const int a0 = std::min({c.a[0], c.a[1], c.a[2]}), b0 = std::min({c.b[0], c.b[1], c.b[2]});
+        const bool down = c.a[0] + c.a[1] + c.a[2] - 3 * a0 == 2;
+        const uint64_t id = (uint64_t(c.t) * uint64_t(g) + uint64_t(a0)) * uint64_t(2 * g) +
+                            uint64_t(2 * b0 + (down ? 1 : 0));
+        double a = std::fmod(0.5 + 0.7548776662466927 * double(id + 1), 1.0);
+        double b = std::fmod(0.5 + 0.5698402909980532 * double(id + 1), 1.0);
+        if (a + b > 1)
+            a = 1 - a, b = 1 - b;
+        const Vec3d& p0 = l.grid_pos[down ? vidx(c.t, a0 + 1, b0) : vidx(c.t, a0, b0)];
+        const Vec3d& p1 = l.grid_pos[down ? vidx(c.t, a0 + 1, b0 + 1) : vidx(c.t, a0 + 1, b0)];
+        const Vec3d& p2 = l.grid_pos[vidx(c.t, a0, b0 + 1)];
+        batch.AddSegment(origin(c.q), Vec3f(p0 + (p1 - p0) * a + (p2 - p0) * b));
+    }
+    batch.Trace(vis_, RayKind::kPenumbra);
+    for (size_t k = 0; k < finest.size(); ++k)
+        if (!batch.occluded[k])
+            (*e)[finest[k].q] += closed_form(finest[k]);
+}
+
 void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
                            int parts) const {
     CHECK_EQ(out.size(), points.size() * 9);
@@ -125,7 +269,8 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     std::vector<float> fraction(points.size());
 
     for (const auto& l : lights_) {
-        if (!(parts & kLights)) break;
+        if (!(parts & kLights))
+            break;
         // 1. Classify each point with a few rays (skip points the light cannot reach).
         batch.Clear();
         std::vector<uint8_t> faces(points.size(), 0);
@@ -138,51 +283,55 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             for (const auto& v : l.vertices)
                 above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
             faces[p] = (side > 0 || (l.two_sided && side < 0)) && above;
-            if (!faces[p]) continue;
+            if (!faces[p])
+                continue;
             Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& c : l.classify) batch.AddSegment(o, c);
+            for (const auto& c : l.classify)
+                batch.AddSegment(o, c);
         }
-        batch.Trace(vis_);
+        batch.Trace(vis_, RayKind::kClassify);
         size_t at = 0;
         std::vector<size_t> penumbra;
+        std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
+        const size_t nk = l.classify.size();
         for (size_t p = 0; p < points.size(); ++p) {
             fraction[p] = 0;
-            if (!faces[p]) continue;
+            if (!faces[p])
+                continue;
             size_t vis = 0;
-            for (size_t k = 0; k < l.classify.size(); ++k) vis += batch.occluded[at++] ? 0 : 1;
-            if (vis == l.classify.size()) fraction[p] = 1;
-            else if (vis > 0) penumbra.push_back(p);
-            else fraction[p] = 0;
+            for (size_t k = 0; k < nk; ++k)
+                vis += batch.occluded[at + k] ? 0 : 1;
+            if (vis == nk) {
+                fraction[p] = 1;
+            } else if (vis > 0) {
+                penumbra.push_back(p);
+                classified.insert(classified.end(), &batch.occluded[at], &batch.occluded[at] + nk);
+            }
+            at += nk;
         }
-        // 2. Penumbra points: the closed form of every cell whose centroid is visible.
-        batch.Clear();
-        for (size_t p : penumbra) {
-            Vec3f o = points[p].vis_point + points[p].normal * offset_;
-            for (const auto& s : l.samples) batch.AddSegment(o, s);
-        }
-        batch.Trace(vis_);
-        const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+        // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
+        std::vector<Vec3d> pen_e;
+        Penumbra(l, points, penumbra, classified, &pen_e);
         auto add = [&](size_t p, const Vec3d& e) {
             for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+                for (int k = 0; k < 3; ++k)
+                    out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
         };
+        for (size_t q = 0; q < penumbra.size(); ++q)
+            add(penumbra[q], pen_e[q]);
+        const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
         // The closed form of a polygon above the point's horizon.
         auto above = [&](std::span<const Vec3d> poly, size_t p) {
             const Vec3d x(points[p].position), h(points[p].horizon);
-            if (Dot(h, h) == 0) return VectorIrradiance(poly, 1.0, x, emission);
+            if (Dot(h, h) == 0)
+                return VectorIrradiance(poly, 1.0, x, emission);
             auto clipped = ClipToHalfSpace(poly, x, h);
             return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
         };
-        at = 0;
-        for (size_t p : penumbra) {
-            Vec3d e{};
-            for (size_t k = 0; k < l.cells.size(); ++k)
-                if (!batch.occluded[at++]) e += above(l.cells[k], p);
-            add(p, e);
-        }
         // 3. Fully lit points: the closed form.
         for (size_t p = 0; p < points.size(); ++p)
-            if (fraction[p] > 0) add(p, above(l.vertices, p));
+            if (fraction[p] > 0)
+                add(p, above(l.vertices, p));
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {
@@ -203,21 +352,24 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
                 batch.Add(o, w, below ? -1.f : far_);
             }
         }
-        batch.Trace(vis_);
+        batch.Trace(vis_, RayKind::kSky);
         for (size_t k = 0; k < batch.size(); ++k)
-            if (batch.segments[k].tfar < 0) batch.occluded[k] = 1;
+            if (batch.segments[k].tfar < 0)
+                batch.occluded[k] = 1;
         // Estimator of E = integral of L(w) V w dw with pdf cos/pi: sum L w pi / (cos N).
         const float scale = float(std::numbers::pi) / float(sky_dirs_.size());
         size_t at = 0;
         for (size_t p = 0; p < points.size(); ++p) {
             for (size_t k = 0; k < dirs.size(); ++k) {
-                if (batch.occluded[at++]) continue;
+                if (batch.occluded[at++])
+                    continue;
                 const Vec3f& w = dirs[k];
                 const float cos_up = std::max(sky_dirs_[k].z, 1e-3f);
                 const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
                 for (int c = 0; c < 3; ++c) {
                     const float l = float(sky_.radiance[c] * gain) * scale / cos_up;
-                    for (int e = 0; e < 3; ++e) out[p * 9 + size_t(3 * c + e)] += l * w[e];
+                    for (int e = 0; e < 3; ++e)
+                        out[p * 9 + size_t(3 * c + e)] += l * w[e];
                 }
             }
         }

@@ -5,12 +5,12 @@
 // fraction, in effect).
 #pragma once
 
+#include "core/vec.h"
+#include "solve/scene.h"
+
 #include <array>
 #include <span>
 #include <vector>
-
-#include "core/vec.h"
-#include "solve/scene.h"
 
 namespace mebake::solve {
 
@@ -50,11 +50,17 @@ private:
         Vec3d normal;
         double area;
         std::vector<Vec3f> classify;  // few sample points: corners pulled in, centre
-        // Penumbrae: the light cut into small triangles, each visible or not as its
-        // centroid is; E sums the closed form of the visible ones.
-        std::vector<std::array<Vec3d, 3>> cells;
-        std::vector<Vec3f> samples;   // the cells' centroids
+        // Penumbrae: each fan triangle (v0, v[t+1], v[t+2]) carries a barycentric grid of
+        // `grid` cells per side. Cells are refined from a coarse level only where the
+        // visibility of their corners disagrees (a shadow edge crosses them); a finest cell
+        // with mixed corners is visible or not as one fixed low-discrepancy point in it is.
+        int grid = 8;
+        std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
+        std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)
     };
+    void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
+                  std::span<const size_t> penumbra, std::span<const uint8_t> classified,
+                  std::vector<Vec3d>* e) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;

@@ -391,7 +391,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             }
         }
         if (pairs.empty()) return;
-        batch.Trace(vis_);
+        batch.Trace(vis_, RayKind::kLink);
         e9.assign(pts.size() * 9, 0.f);
         for (size_t q = 0; q < pairs.size(); ++q) {
             if (batch.occluded[q]) continue;
@@ -461,6 +461,7 @@ void Solver::Run(const Progress& progress) {
     const auto t0 = Clock::now();
     const uint32_t nc = uint32_t(charts_.size());
     const uint64_t rays0 = TotalRays();
+    const auto kinds0 = RaysByKind();
 
     // Reference irradiance for the refinement floor: the brightest root-level estimate.
     {
@@ -531,6 +532,9 @@ void Solver::Run(const Progress& progress) {
     }
     stats_.seconds_indirect = Since(t1);
     stats_.rays = TotalRays() - rays0;
+    const auto kinds1 = RaysByKind();
+    stats_.rays_by_kind.resize(kinds1.size());
+    for (size_t k = 0; k < kinds1.size(); ++k) stats_.rays_by_kind[k] = kinds1[k] - kinds0[k];
     for (const auto& f : fields_) {
         for (const auto& n : f.nodes()) {
             if (stats_.nodes_per_level.size() <= n.level) stats_.nodes_per_level.resize(n.level + 1u);
