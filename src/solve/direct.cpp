@@ -126,7 +126,8 @@ double DirectLight::EmittedPower() const {
 // edge crosses the light, and all points of a level share one Embree batch.
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                            std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                           std::vector<Vec3d>* e) const {
+                           const uint8_t* prior, std::vector<Vec3d>* e,
+                           std::vector<uint8_t>* states) const {
     e->assign(penumbra.size(), Vec3d{});
     if (penumbra.empty())
         return;
@@ -141,6 +142,7 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     };
     for (size_t q = 0; q < penumbra.size(); ++q) {
         uint8_t* st = &state[q * nv];
+        if (prior) std::copy(prior, prior + nv, st);
         const uint8_t* cls = &classified[q * nk];
         for (size_t t = 0; t < nt; ++t) {
             st[vidx(t, 0, 0)] = cls[0] ? 3 : 2;
@@ -259,79 +261,133 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     for (size_t k = 0; k < finest.size(); ++k)
         if (!batch.occluded[k])
             (*e)[finest[k].q] += closed_form(finest[k]);
+    if (states) {
+        for (auto& st : state) st = st == 1 ? 0 : st;
+        *states = std::move(state);
+    }
 }
 
-void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
-                           int parts) const {
+// One light at the points `which`. prior_cls / prior_grid (may be null): visibility states
+// (2 visible, 3 hidden, 0 unknown) of the classification targets / grid vertices taken as
+// known for every point, so no ray is spent on them. cls_out / grid_out (may be null)
+// receive every point's states, for use as a prior elsewhere: a fully lit point counts as
+// seeing every vertex, an umbra point none, a point the light cannot reach is unknown.
+void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
+                                std::span<const size_t> which, const uint8_t* prior_cls,
+                                const uint8_t* prior_grid, std::span<float> out,
+                                std::vector<uint8_t>* cls_out,
+                                std::vector<uint8_t>* grid_out) const {
+    const size_t nk = l.classify.size();
+    const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+    // 1. Classify each point with a few rays (skip points the light cannot reach).
+    SegmentBatch batch;
+    std::vector<uint8_t> faces(which.size(), 0), cls(which.size() * nk, 0);
+    std::vector<std::pair<size_t, size_t>> asked;
+    for (size_t q = 0; q < which.size(); ++q) {
+        const auto& rp = points[which[q]];
+        // E does not involve the receiver's normal (that is what keeps it smooth on
+        // noisy scans): what lies below the surface is removed by visibility alone.
+        double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
+        bool above = Dot(rp.horizon, rp.horizon) == 0;
+        for (const auto& v : l.vertices) above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
+        faces[q] = (side > 0 || (l.two_sided && side < 0)) && above;
+        if (!faces[q]) continue;
+        const Vec3f o = rp.vis_point + rp.normal * offset_;
+        for (size_t k = 0; k < nk; ++k) {
+            if (prior_cls && prior_cls[k] != 0) {
+                cls[q * nk + k] = prior_cls[k];
+                continue;
+            }
+            asked.push_back({q, k});
+            batch.AddSegment(o, l.classify[k]);
+        }
+    }
+    batch.Trace(vis_, RayKind::kClassify);
+    for (size_t r = 0; r < asked.size(); ++r)
+        cls[asked[r].first * nk + asked[r].second] = batch.occluded[r] ? 3 : 2;
+    enum : uint8_t { kAway, kLit, kUmbra, kPenumbra };
+    std::vector<uint8_t> kind(which.size(), kAway);
+    std::vector<size_t> penumbra;
+    std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
+    for (size_t q = 0; q < which.size(); ++q) {
+        if (!faces[q]) continue;
+        size_t vis = 0;
+        for (size_t k = 0; k < nk; ++k) vis += cls[q * nk + k] == 2 ? 1 : 0;
+        kind[q] = vis == nk ? kLit : vis == 0 ? kUmbra : kPenumbra;
+        if (kind[q] != kPenumbra) continue;
+        penumbra.push_back(which[q]);
+        for (size_t k = 0; k < nk; ++k) classified.push_back(cls[q * nk + k] == 3 ? 1 : 0);
+    }
+    // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
+    std::vector<Vec3d> pen_e;
+    std::vector<uint8_t> pen_states;
+    Penumbra(l, points, penumbra, classified, prior_grid, &pen_e, grid_out ? &pen_states : nullptr);
+    auto add = [&](size_t p, const Vec3d& e) {
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+    };
+    for (size_t q = 0; q < penumbra.size(); ++q) add(penumbra[q], pen_e[q]);
+    // 3. Fully lit points: the closed form above the point's horizon.
+    const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+    for (size_t q = 0; q < which.size(); ++q) {
+        if (kind[q] != kLit) continue;
+        const size_t p = which[q];
+        const Vec3d x(points[p].position), h(points[p].horizon);
+        if (Dot(h, h) == 0) {
+            add(p, VectorIrradiance(l.vertices, 1.0, x, emission));
+        } else {
+            auto clipped = ClipToHalfSpace(l.vertices, x, h);
+            if (clipped.size() >= 3) add(p, VectorIrradiance(clipped, 1.0, x, emission));
+        }
+    }
+    if (cls_out) {
+        cls_out->assign(which.size() * nk, 0);
+        for (size_t q = 0; q < which.size(); ++q)
+            if (faces[q]) std::copy(&cls[q * nk], &cls[q * nk] + nk, &(*cls_out)[q * nk]);
+    }
+    if (grid_out) {
+        grid_out->assign(which.size() * nv, 0);
+        size_t at = 0;
+        for (size_t q = 0; q < which.size(); ++q) {
+            uint8_t* g = &(*grid_out)[q * nv];
+            if (kind[q] == kLit || kind[q] == kUmbra) std::fill(g, g + nv, kind[q] == kLit ? 2 : 3);
+            if (kind[q] == kPenumbra) std::copy(&pen_states[at * nv], &pen_states[(at + 1) * nv], g), ++at;
+        }
+    }
+}
+
+void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts,
+                           size_t probes) const {
     CHECK_EQ(out.size(), points.size() * 9);
     std::fill(out.begin(), out.end(), 0.f);
     SegmentBatch batch;
-    std::vector<float> fraction(points.size());
 
     for (const auto& l : lights_) {
-        if (!(parts & kLights))
-            break;
-        // 1. Classify each point with a few rays (skip points the light cannot reach).
-        batch.Clear();
-        std::vector<uint8_t> faces(points.size(), 0);
-        for (size_t p = 0; p < points.size(); ++p) {
-            const auto& rp = points[p];
-            // E does not involve the receiver's normal (that is what keeps it smooth on
-            // noisy scans): what lies below the surface is removed by visibility alone.
-            double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
-            bool above = Dot(rp.horizon, rp.horizon) == 0;
-            for (const auto& v : l.vertices)
-                above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
-            faces[p] = (side > 0 || (l.two_sided && side < 0)) && above;
-            if (!faces[p])
-                continue;
-            Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& c : l.classify)
-                batch.AddSegment(o, c);
+        if (!(parts & kLights)) break;
+        if (probes == 0 || probes >= points.size()) {
+            std::vector<size_t> all(points.size());
+            for (size_t p = 0; p < all.size(); ++p) all[p] = p;
+            EvaluateLight(l, points, all, nullptr, nullptr, out, nullptr, nullptr);
+            continue;
         }
-        batch.Trace(vis_, RayKind::kClassify);
-        size_t at = 0;
-        std::vector<size_t> penumbra;
-        std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
+        // Points of one small patch: the probes are evaluated first; where all of them agree
+        // on a light vertex's visibility, the other points take it without a ray.
         const size_t nk = l.classify.size();
-        for (size_t p = 0; p < points.size(); ++p) {
-            fraction[p] = 0;
-            if (!faces[p])
-                continue;
-            size_t vis = 0;
-            for (size_t k = 0; k < nk; ++k)
-                vis += batch.occluded[at + k] ? 0 : 1;
-            if (vis == nk) {
-                fraction[p] = 1;
-            } else if (vis > 0) {
-                penumbra.push_back(p);
-                classified.insert(classified.end(), &batch.occluded[at], &batch.occluded[at] + nk);
-            }
-            at += nk;
-        }
-        // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
-        std::vector<Vec3d> pen_e;
-        Penumbra(l, points, penumbra, classified, &pen_e);
-        auto add = [&](size_t p, const Vec3d& e) {
-            for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k)
-                    out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+        const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+        std::vector<size_t> first(probes), rest(points.size() - probes);
+        for (size_t p = 0; p < probes; ++p) first[p] = p;
+        for (size_t p = probes; p < points.size(); ++p) rest[p - probes] = p;
+        std::vector<uint8_t> cls, grid;
+        EvaluateLight(l, points, first, nullptr, nullptr, out, &cls, &grid);
+        auto agree = [&](const std::vector<uint8_t>& st, size_t n) {
+            std::vector<uint8_t> prior(st.begin(), st.begin() + std::ptrdiff_t(n));
+            for (size_t q = 1; q < probes; ++q)
+                for (size_t k = 0; k < n; ++k)
+                    if (st[q * n + k] != prior[k]) prior[k] = 0;
+            return prior;
         };
-        for (size_t q = 0; q < penumbra.size(); ++q)
-            add(penumbra[q], pen_e[q]);
-        const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
-        // The closed form of a polygon above the point's horizon.
-        auto above = [&](std::span<const Vec3d> poly, size_t p) {
-            const Vec3d x(points[p].position), h(points[p].horizon);
-            if (Dot(h, h) == 0)
-                return VectorIrradiance(poly, 1.0, x, emission);
-            auto clipped = ClipToHalfSpace(poly, x, h);
-            return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
-        };
-        // 3. Fully lit points: the closed form.
-        for (size_t p = 0; p < points.size(); ++p)
-            if (fraction[p] > 0)
-                add(p, above(l.vertices, p));
+        const auto prior_cls = agree(cls, nk), prior_grid = agree(grid, nv);
+        EvaluateLight(l, points, rest, prior_cls.data(), prior_grid.data(), out, nullptr, nullptr);
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {

@@ -34,8 +34,11 @@ public:
 
     enum Parts { kLights = 1, kSky = 2, kAll = 3 };
     // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.
-    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
-                  int parts = kAll) const;
+    // probes > 0: the points lie on one small patch and the first `probes` of them surround
+    // it; where all probes agree on the visibility of a light's vertex (or sub-cell corner),
+    // the other points take it without tracing (reuse of visibility across a patch).
+    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
+                  size_t probes = 0) const;
     bool has_lights() const { return !lights_.empty(); }
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
@@ -58,9 +61,14 @@ private:
         std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
         std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)
     };
+    void EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
+                       std::span<const size_t> which, const uint8_t* prior_cls,
+                       const uint8_t* prior_grid, std::span<float> out,
+                       std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                  std::vector<Vec3d>* e) const;
+                  const uint8_t* prior, std::vector<Vec3d>* e,
+                  std::vector<uint8_t>* states) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;

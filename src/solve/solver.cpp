@@ -25,6 +25,11 @@ double Since(Clock::time_point t) {
 
 float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
 
+// Nodes this many levels above the light-map texel or finer share light visibility between
+// their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
+// what the light map cannot hold anyway.
+constexpr int kCoherentLevels = 3;
+
 }  // namespace
 
 struct Solver::Emitter {
@@ -133,29 +138,78 @@ void Solver::RefineDirect(uint32_t chart) {
     std::vector<ReceiverPoint> pts;
     std::vector<Vec3f> albedo;
     std::vector<float> e9, vals, coeffs(size_t(field.stride()));
-    // Field values at points: E (9 blocks) or B = rho (n.E)+ (3 blocks).
-    auto evaluate = [&](const QuadNode& node, int grid, bool gauss) {
-        pts.clear();
-        albedo.clear();
+    // Field values at the node's ng x ng Gauss points (gauss_vals) and, with control, at its
+    // gc x gc control grid (ctrl_vals): E (9 blocks) or B = rho (n.E)+ (3 blocks). All points
+    // go to the direct light in one call; on small nodes the four outermost points are its
+    // probes (visibility shared across the node, DirectLight::Evaluate).
+    std::vector<float> gauss_vals, ctrl_vals, e9_all;
+    std::vector<ReceiverPoint> all_pts;
+    std::vector<Vec3f> all_albedo;
+    std::vector<int> slot;  // evaluation order -> index (Gauss 0..ng^2-1, then control)
+    auto evaluate = [&](const QuadNode& node, bool control) {
         const int gl = std::min(finest, int(node.level) + 2);
-        for (int c = 0; c < grid; ++c) {
-            for (int a = 0; a < grid; ++a) {
-                double s, t, w;
-                if (gauss) {
-                    GaussPoint2D(grid, a + grid * c, &s, &t, &w);
-                } else {
-                    s = ControlPoint(grid, a);
-                    t = ControlPoint(grid, c);
-                }
-                const float u = float(node.U(s)), v = float(node.V(t));
-                auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-                pts.push_back({smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)});
-                albedo.push_back(Albedo(smp.material, smp.color));
+        const int n_gauss = ng * ng, n_ctrl = control ? gc * gc : 0;
+        auto point = [&](int idx) {
+            double s, t, w;
+            if (idx < n_gauss) {
+                GaussPoint2D(ng, idx, &s, &t, &w);
+            } else {
+                s = ControlPoint(gc, (idx - n_gauss) % gc);
+                t = ControlPoint(gc, (idx - n_gauss) / gc);
+            }
+            const float u = float(node.U(s)), v = float(node.V(t));
+            auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+            return std::make_pair(ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
+                                  Albedo(smp.material, smp.color));
+        };
+        // Probes first: the control grid's corners, or the Gauss grid's.
+        slot.clear();
+        const bool coherent = int(node.level) + kCoherentLevels >= max_level && ng > 1;
+        if (coherent) {
+            if (control) {
+                for (int c : {0, gc - 1, gc * (gc - 1), gc * gc - 1}) slot.push_back(n_gauss + c);
+            } else {
+                for (int c : {0, ng - 1, ng * (ng - 1), ng * ng - 1}) slot.push_back(c);
             }
         }
-        e9.assign(pts.size() * 9, 0.f);
-        if (direct.has_lights()) direct.Evaluate(pts, e9, DirectLight::kLights);
-        ToFieldValues(pts, albedo, e9, radiosity, &vals);
+        const size_t probes = slot.size();
+        for (int k = 0; k < n_gauss + n_ctrl; ++k)
+            if (std::find(slot.begin(), slot.begin() + std::ptrdiff_t(probes), k) ==
+                slot.begin() + std::ptrdiff_t(probes))
+                slot.push_back(k);
+        all_pts.resize(slot.size());
+        all_albedo.resize(slot.size());
+        for (size_t k = 0; k < slot.size(); ++k) {
+            auto [rp, rho] = point(slot[k]);
+            all_pts[k] = rp;
+            all_albedo[k] = rho;
+        }
+        e9_all.assign(all_pts.size() * 9, 0.f);
+        if (direct.has_lights())
+            direct.Evaluate(all_pts, e9_all, DirectLight::kLights, probes);
+        // Back to Gauss and control order.
+        pts.resize(size_t(n_gauss));
+        albedo.resize(size_t(n_gauss));
+        e9.assign(size_t(n_gauss) * 9, 0.f);
+        std::vector<ReceiverPoint> cpts(static_cast<size_t>(n_ctrl));
+        std::vector<Vec3f> calb(static_cast<size_t>(n_ctrl));
+        std::vector<float> ce9(size_t(n_ctrl) * 9);
+        for (size_t k = 0; k < slot.size(); ++k) {
+            const int idx = slot[k];
+            const float* src = &e9_all[k * 9];
+            if (idx < n_gauss) {
+                pts[size_t(idx)] = all_pts[k];
+                albedo[size_t(idx)] = all_albedo[k];
+                std::copy(src, src + 9, &e9[size_t(idx) * 9]);
+            } else {
+                const size_t c = size_t(idx - n_gauss);
+                cpts[c] = all_pts[k];
+                calb[c] = all_albedo[k];
+                std::copy(src, src + 9, &ce9[c * 9]);
+            }
+        }
+        ToFieldValues(pts, albedo, e9, radiosity, &gauss_vals);
+        if (control) ToFieldValues(cpts, calb, ce9, radiosity, &ctrl_vals);
     };
     auto max_abs = [](const std::vector<float>& v) {
         float m = 0;
@@ -178,13 +232,13 @@ void Solver::RefineDirect(uint32_t chart) {
             for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
             continue;
         }
-        evaluate(node, ng, true);
-        float scale = max_abs(vals);
-        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
-        if (int(node.level) < max_level) {
-            evaluate(node, gc, false);
-            scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
-            float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
+        const bool control = int(node.level) < max_level;
+        evaluate(node, control);
+        float scale = max_abs(gauss_vals);
+        ProjectGauss(order, ng, gauss_vals.data(), blocks, coeffs.data());
+        if (control) {
+            scale = std::max({scale, max_abs(ctrl_vals), float(reference_ * 0.02)});
+            float err = ControlGridError(order, gc, coeffs.data(), blocks, ctrl_vals.data());
             if (err > float(opt_.settings.tolerance) * scale &&
                 field.node_count() + 4 <= opt_.max_nodes_per_chart) {
                 int32_t first = field.Subdivide(n);
