@@ -131,7 +131,10 @@ void Solver::RefineDirect(uint32_t chart) {
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;
     const int finest = sc.geometry.finest_level();
-    const int max_level = sc.max_level >= 0 ? sc.max_level : finest;
+    // A node's polynomial holds (M+1)^2 values per block: a node narrower than M+1 texels
+    // describes more than the light map can store, so refinement stops there.
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : finest;
+    const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
     DirectLight direct(scene_, opt_.settings, vis_, RayOffset(chart), opt_.scene_size);
     const bool radiosity = opt_.settings.radiosity;
 
