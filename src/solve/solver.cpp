@@ -1,10 +1,5 @@
 #include "solve/solver.h"
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <numbers>
-
 #include "core/check.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -13,6 +8,11 @@
 #include "solve/rays.h"
 #include "solve/shading.h"
 #include "solve/visibility.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
 
 namespace mebake::solve {
 
@@ -23,7 +23,9 @@ double Since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
+float Luminance(const Vec3f& c) {
+    return (c.x + c.y + c.z) / 3;
+}
 
 // Nodes this many levels above the light-map texel or finer share light visibility between
 // their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
@@ -37,7 +39,7 @@ struct Solver::Emitter {
         Vec3f pos, nrm, vis;
         float area = 0;
         float radius = 0;
-        Vec3f db;  // unshot radiosity (area-weighted mean over the texel)
+        Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
         float db_max = 0;  // largest luminance of db within the texel
     };
     uint32_t chart = 0;
@@ -47,12 +49,13 @@ struct Solver::Emitter {
     double scale = 1;
 };
 
-Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const VisibilityScene& vis,
-               SolveOptions opt)
+Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
+               const VisibilityScene& vis, SolveOptions opt)
     : scene_(scene), charts_(charts), vis_(vis), opt_(std::move(opt)) {
     const int blocks = opt_.settings.radiosity ? 3 : 9;
     fields_.reserve(charts_.size());
-    for (size_t c = 0; c < charts_.size(); ++c) fields_.emplace_back(opt_.settings.order, blocks);
+    for (size_t c = 0; c < charts_.size(); ++c)
+        fields_.emplace_back(opt_.settings.order, blocks);
     emissive_.assign(charts_.size(), 0);
     if (opt_.shoot_emission) {
         for (size_t c = 0; c < charts_.size(); ++c) {
@@ -101,8 +104,8 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
         GaussPoint2D(ng, p, &s, &t, &w);
         const float u = float(node.U(s)), v = float(node.V(t));
         auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-        pts->push_back({smp.position, smp.normal, smp.vis_point,
-                        horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
+        pts->push_back(
+            {smp.position, smp.normal, smp.vis_point, horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
         albedo->push_back(Albedo(smp.material, smp.color));
     }
 }
@@ -162,17 +165,20 @@ void Solver::RefineDirect(uint32_t chart) {
             }
             const float u = float(node.U(s)), v = float(node.V(t));
             auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-            return std::make_pair(ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
-                                  Albedo(smp.material, smp.color));
+            return std::make_pair(
+                ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
+                Albedo(smp.material, smp.color));
         };
         // Probes first: the control grid's corners, or the Gauss grid's.
         slot.clear();
         const bool coherent = int(node.level) + kCoherentLevels >= max_level && ng > 1;
         if (coherent) {
             if (control) {
-                for (int c : {0, gc - 1, gc * (gc - 1), gc * gc - 1}) slot.push_back(n_gauss + c);
+                for (int c : {0, gc - 1, gc * (gc - 1), gc * gc - 1})
+                    slot.push_back(n_gauss + c);
             } else {
-                for (int c : {0, ng - 1, ng * (ng - 1), ng * ng - 1}) slot.push_back(c);
+                for (int c : {0, ng - 1, ng * (ng - 1), ng * ng - 1})
+                    slot.push_back(c);
             }
         }
         const size_t probes = slot.size();
@@ -212,11 +218,13 @@ void Solver::RefineDirect(uint32_t chart) {
             }
         }
         ToFieldValues(pts, albedo, e9, radiosity, &gauss_vals);
-        if (control) ToFieldValues(cpts, calb, ce9, radiosity, &ctrl_vals);
+        if (control)
+            ToFieldValues(cpts, calb, ce9, radiosity, &ctrl_vals);
     };
     auto max_abs = [](const std::vector<float>& v) {
         float m = 0;
-        for (float x : v) m = std::max(m, std::abs(x));
+        for (float x : v)
+            m = std::max(m, std::abs(x));
         return m;
     };
 
@@ -232,7 +240,8 @@ void Solver::RefineDirect(uint32_t chart) {
         const int min_level = opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0);
         if (int(node.level) < std::min(min_level, max_level)) {
             int32_t first = field.Subdivide(n);
-            for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
+            for (int c = 3; c >= 0; --c)
+                stack.push_back(size_t(first + c));
             continue;
         }
         const bool control = int(node.level) < max_level;
@@ -245,7 +254,8 @@ void Solver::RefineDirect(uint32_t chart) {
             if (err > float(opt_.settings.tolerance) * scale &&
                 field.node_count() + 4 <= opt_.max_nodes_per_chart) {
                 int32_t first = field.Subdivide(n);
-                for (int c = 3; c >= 0; --c) stack.push_back(size_t(first + c));
+                for (int c = 3; c >= 0; --c)
+                    stack.push_back(size_t(first + c));
                 continue;
             }
         }
@@ -259,7 +269,8 @@ void Solver::RefineDirect(uint32_t chart) {
     // The sky is smooth lighting sampled by discrete directions: its quadrature steps
     // are not detail worth refining for. It is gathered at a fixed level (or the leaves
     // above it) and pushed down, like indirect light.
-    if (!direct.has_sky()) return;
+    if (!direct.has_sky())
+        return;
     const int sky_level = std::min(max_level, opt_.sky_level);
     std::vector<size_t> targets;
     stack.assign(1, 0);
@@ -271,7 +282,8 @@ void Solver::RefineDirect(uint32_t chart) {
             targets.push_back(n);
             continue;
         }
-        for (int c = 3; c >= 0; --c) stack.push_back(size_t(node.first_child + c));
+        for (int c = 3; c >= 0; --c)
+            stack.push_back(size_t(node.first_child + c));
     }
     for (size_t n : targets) {
         const QuadNode node = field.node(n);
@@ -281,7 +293,8 @@ void Solver::RefineDirect(uint32_t chart) {
         ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
-        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        for (int k = 0; k < field.stride(); ++k)
+            pend[k] += coeffs[size_t(k)];
     }
     field.PushPending();
 }
@@ -306,7 +319,8 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.vis = g.vis_point;
             t.area = g.area;
             t.radius = g.radius;
-            if (g.area <= 0) continue;
+            if (g.area <= 0)
+                continue;
             double u = (i + 0.5) / n, v = (j + 0.5) / n;
             field.EvalUnshot(u, v, val);
             const Material& m = scene_.MaterialOf(g.material);
@@ -321,7 +335,8 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     b = rho[c] * std::max(0.f, irr);
                 }
                 // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-                if (first_shot && emissive_[chart]) b += float(std::numbers::pi) * m.emission[c];
+                if (first_shot && emissive_[chart])
+                    b += float(std::numbers::pi) * m.emission[c];
                 t.db[c] = b;
             }
             t.db_max = Luminance(t.db);
@@ -364,7 +379,8 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
     Emitter e;
     BuildEmitter(chart, first_shot, &e);
     double p = 0;
-    for (const auto& t : e.levels.back()) p += double(Luminance(t.db)) * t.area;
+    for (const auto& t : e.levels.back())
+        p += double(Luminance(t.db)) * t.area;
     return p;
 }
 
@@ -396,7 +412,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             *center = g.position;
             *radius = g.radius;
         } else {
-            auto smp = stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+            auto smp =
+                stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
             *center = smp.position;
             *radius = float(sc.scale * node.size() * 0.75);
         }
@@ -419,13 +436,17 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 for (uint32_t a = 0; a < span; ++a) {
                     const uint32_t k = (rj * span + b) * row + ri * span + a;
                     const auto& t = texels[k];
-                    if (t.area <= 0 || t.db_max <= 0) continue;
+                    if (t.area <= 0 || t.db_max <= 0)
+                        continue;
                     const Vec3d d = Vec3d(t.pos) - Vec3d(rp.position);
                     const double r2 = Dot(d, d);
-                    if (r2 < 1e-20) continue;
-                    if (Dot(d, Vec3d(rp.normal)) <= 0) continue;  // below the receiver's horizon
+                    if (r2 < 1e-20)
+                        continue;
+                    if (Dot(d, Vec3d(rp.normal)) <= 0)
+                        continue;  // below the receiver's horizon
                     const double ce = -Dot(d, Vec3d(t.nrm));
-                    if (ce <= 0) continue;                        // emitter faces away
+                    if (ce <= 0)
+                        continue;  // emitter faces away
                     Vec3d contrib;
                     if (r2 < 4 * texel_side * texel_side) {
                         // Near field: the texel as a uniform square, in closed form.
@@ -437,8 +458,10 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                         const Vec3d quad[4] = {c - au * h - av * h, c + au * h - av * h,
                                                c + au * h + av * h, c - au * h + av * h};
                         auto clipped = ClipToHalfSpace(quad, Vec3d(rp.position), Vec3d(rp.normal));
-                        if (clipped.size() < 3) continue;
-                        contrib = VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
+                        if (clipped.size() < 3)
+                            continue;
+                        contrib =
+                            VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
                     } else {
                         contrib = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
                     }
@@ -447,11 +470,13 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 }
             }
         }
-        if (pairs.empty()) return;
+        if (pairs.empty())
+            return;
         batch.Trace(vis_, RayKind::kLink);
         e9.assign(pts.size() * 9, 0.f);
         for (size_t q = 0; q < pairs.size(); ++q) {
-            if (batch.occluded[q]) continue;
+            if (batch.occluded[q])
+                continue;
             const Pair& pr = pairs[q];
             const Vec3f& db = texels[pr.texel].db;
             for (int c = 0; c < 3; ++c)
@@ -461,7 +486,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
         ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
-        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        for (int k = 0; k < field.stride(); ++k)
+            pend[k] += coeffs[size_t(k)];
     };
 
     // Link refinement (hierarchical radiosity): a pair (receiver node, emitter region) is
@@ -481,7 +507,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             stack.pop_back();
             const QuadNode node = field.node(lk.node);
             const auto& et = em.levels[size_t(lk.level)][size_t(lk.j) * (1u << lk.level) + lk.i];
-            if (et.area <= 0 || et.db_max <= 0) continue;
+            if (et.area <= 0 || et.db_max <= 0)
+                continue;
             Vec3f rc;
             float rr;
             node_bounds(node, &rc, &rr);
@@ -490,10 +517,10 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             const double size_e = em.scale / double(1u << lk.level);
             const bool recv_can = !node.leaf();
             const bool emit_can = lk.level < top;
-            const double bound = dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist)
-                                          : 1e300;
-            const bool small = dist > 0 && size_r / dist <= opt_.receiver_tau &&
-                               size_e / dist <= opt_.emitter_tau;
+            const double bound =
+                dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
+            const bool small =
+                dist > 0 && size_r / dist <= opt_.receiver_tau && size_e / dist <= opt_.emitter_tau;
             if (small || bound < negligible || (!recv_can && !emit_can)) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
@@ -527,11 +554,13 @@ void Solver::Run(const Progress& progress) {
         for (const auto& c : charts_) {
             for (int k = 0; k < std::min(c.geometry.finest_level(), 2) + 1; ++k) {
                 for (const auto& g : c.geometry.levels[size_t(k)])
-                    if (g.area > 0) pts.push_back({g.position, g.normal, g.vis_point});
+                    if (g.area > 0)
+                        pts.push_back({g.position, g.normal, g.vis_point});
             }
         }
         std::vector<float> e(pts.size() * 9, 0.f);
-        if (!direct.empty() && !pts.empty()) direct.Evaluate(pts, e);
+        if (!direct.empty() && !pts.empty())
+            direct.Evaluate(pts, e);
         double ref = 0;
         for (size_t p = 0; p < pts.size(); ++p)
             for (int c = 0; c < 3; ++c) {
@@ -555,10 +584,12 @@ void Solver::Run(const Progress& progress) {
             total += p;
             largest = std::max(largest, p);
         }
-        if (first) stats_.emitted_power = total;
+        if (first)
+            stats_.emitted_power = total;
         stats_.unshot_power = total;
         const double fraction = stats_.emitted_power > 0 ? total / stats_.emitted_power : 0;
-        if (progress) progress(batch, fraction, TotalRays() - rays0);
+        if (progress)
+            progress(batch, fraction, TotalRays() - rays0);
         if (total <= 0 || fraction < opt_.settings.stop_fraction) {
             stats_.stop_reason = "converged";
             break;
@@ -581,7 +612,8 @@ void Solver::Run(const Progress& progress) {
         ParallelFor(0, int64_t(shooters.size()), [&](int64_t k) {
             BuildEmitter(shooters[size_t(k)], first, &emitters[size_t(k)]);
         });
-        for (uint32_t c : shooters) fields_[c].ClearUnshot();
+        for (uint32_t c : shooters)
+            fields_[c].ClearUnshot();
         ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
         stats_.shots += shooters.size();
         stats_.batches = batch + 1;
@@ -591,10 +623,12 @@ void Solver::Run(const Progress& progress) {
     stats_.rays = TotalRays() - rays0;
     const auto kinds1 = RaysByKind();
     stats_.rays_by_kind.resize(kinds1.size());
-    for (size_t k = 0; k < kinds1.size(); ++k) stats_.rays_by_kind[k] = kinds1[k] - kinds0[k];
+    for (size_t k = 0; k < kinds1.size(); ++k)
+        stats_.rays_by_kind[k] = kinds1[k] - kinds0[k];
     for (const auto& f : fields_) {
         for (const auto& n : f.nodes()) {
-            if (stats_.nodes_per_level.size() <= n.level) stats_.nodes_per_level.resize(n.level + 1u);
+            if (stats_.nodes_per_level.size() <= n.level)
+                stats_.nodes_per_level.resize(n.level + 1u);
             ++stats_.nodes_per_level[n.level];
             stats_.leaves += n.leaf() ? 1 : 0;
         }
