@@ -521,7 +521,10 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
             const bool small =
                 dist > 0 && size_r / dist <= opt_.receiver_tau && size_e / dist <= opt_.emitter_tau;
-            if (small || bound < negligible || (!recv_can && !emit_can)) {
+            // A receiver node already smaller than the finest emitter samples gains nothing
+            // from splitting: the samples' size bounds the link's accuracy.
+            const bool emitter_bound = !emit_can && size_r <= size_e;
+            if (small || bound < negligible || (!recv_can && !emit_can) || emitter_bound) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
                 evaluate_link(lk.node, em, lk.level, lk.i, lk.j, ls);
@@ -620,6 +623,7 @@ void Solver::Run(const Progress& progress) {
         first = false;
     }
     stats_.seconds_indirect = Since(t1);
+
     stats_.rays = TotalRays() - rays0;
     const auto kinds1 = RaysByKind();
     stats_.rays_by_kind.resize(kinds1.size());
