@@ -142,7 +142,8 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     };
     for (size_t q = 0; q < penumbra.size(); ++q) {
         uint8_t* st = &state[q * nv];
-        if (prior) std::copy(prior, prior + nv, st);
+        if (prior)
+            std::copy(prior, prior + nv, st);
         const uint8_t* cls = &classified[q * nk];
         for (size_t t = 0; t < nt; ++t) {
             st[vidx(t, 0, 0)] = cls[0] ? 3 : 2;
@@ -262,7 +263,8 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
         if (!batch.occluded[k])
             (*e)[finest[k].q] += closed_form(finest[k]);
     if (states) {
-        for (auto& st : state) st = st == 1 ? 0 : st;
+        for (auto& st : state)
+            st = st == 1 ? 0 : st;
         *states = std::move(state);
     }
 }
@@ -289,9 +291,11 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
         // noisy scans): what lies below the surface is removed by visibility alone.
         double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
         bool above = Dot(rp.horizon, rp.horizon) == 0;
-        for (const auto& v : l.vertices) above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
+        for (const auto& v : l.vertices)
+            above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
         faces[q] = (side > 0 || (l.two_sided && side < 0)) && above;
-        if (!faces[q]) continue;
+        if (!faces[q])
+            continue;
         const Vec3f o = rp.vis_point + rp.normal * offset_;
         for (size_t k = 0; k < nk; ++k) {
             if (prior_cls && prior_cls[k] != 0) {
@@ -310,13 +314,17 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     std::vector<size_t> penumbra;
     std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
     for (size_t q = 0; q < which.size(); ++q) {
-        if (!faces[q]) continue;
+        if (!faces[q])
+            continue;
         size_t vis = 0;
-        for (size_t k = 0; k < nk; ++k) vis += cls[q * nk + k] == 2 ? 1 : 0;
+        for (size_t k = 0; k < nk; ++k)
+            vis += cls[q * nk + k] == 2 ? 1 : 0;
         kind[q] = vis == nk ? kLit : vis == 0 ? kUmbra : kPenumbra;
-        if (kind[q] != kPenumbra) continue;
+        if (kind[q] != kPenumbra)
+            continue;
         penumbra.push_back(which[q]);
-        for (size_t k = 0; k < nk; ++k) classified.push_back(cls[q * nk + k] == 3 ? 1 : 0);
+        for (size_t k = 0; k < nk; ++k)
+            classified.push_back(cls[q * nk + k] == 3 ? 1 : 0);
     }
     // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
     std::vector<Vec3d> pen_e;
@@ -324,49 +332,73 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     Penumbra(l, points, penumbra, classified, prior_grid, &pen_e, grid_out ? &pen_states : nullptr);
     auto add = [&](size_t p, const Vec3d& e) {
         for (int c = 0; c < 3; ++c)
-            for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+            for (int k = 0; k < 3; ++k)
+                out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
     };
-    for (size_t q = 0; q < penumbra.size(); ++q) add(penumbra[q], pen_e[q]);
+    for (size_t q = 0; q < penumbra.size(); ++q)
+        add(penumbra[q], pen_e[q]);
     // 3. Fully lit points: the closed form above the point's horizon.
     const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
     for (size_t q = 0; q < which.size(); ++q) {
-        if (kind[q] != kLit) continue;
+        if (kind[q] != kLit)
+            continue;
         const size_t p = which[q];
         const Vec3d x(points[p].position), h(points[p].horizon);
         if (Dot(h, h) == 0) {
             add(p, VectorIrradiance(l.vertices, 1.0, x, emission));
         } else {
             auto clipped = ClipToHalfSpace(l.vertices, x, h);
-            if (clipped.size() >= 3) add(p, VectorIrradiance(clipped, 1.0, x, emission));
+            if (clipped.size() >= 3)
+                add(p, VectorIrradiance(clipped, 1.0, x, emission));
         }
     }
     if (cls_out) {
         cls_out->assign(which.size() * nk, 0);
         for (size_t q = 0; q < which.size(); ++q)
-            if (faces[q]) std::copy(&cls[q * nk], &cls[q * nk] + nk, &(*cls_out)[q * nk]);
+            if (faces[q])
+                std::copy(&cls[q * nk], &cls[q * nk] + nk, &(*cls_out)[q * nk]);
     }
     if (grid_out) {
         grid_out->assign(which.size() * nv, 0);
         size_t at = 0;
         for (size_t q = 0; q < which.size(); ++q) {
             uint8_t* g = &(*grid_out)[q * nv];
-            if (kind[q] == kLit || kind[q] == kUmbra) std::fill(g, g + nv, kind[q] == kLit ? 2 : 3);
-            if (kind[q] == kPenumbra) std::copy(&pen_states[at * nv], &pen_states[(at + 1) * nv], g), ++at;
+            if (kind[q] == kLit || kind[q] == kUmbra)
+                std::fill(g, g + nv, kind[q] == kLit ? 2 : 3);
+            if (kind[q] == kPenumbra)
+                std::copy(&pen_states[at * nv], &pen_states[(at + 1) * nv], g), ++at;
         }
     }
 }
 
 void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts,
-                           size_t probes) const {
+                           size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
     CHECK_EQ(out.size(), points.size() * 9);
     std::fill(out.begin(), out.end(), 0.f);
     SegmentBatch batch;
+    if (cache)
+        CHECK_EQ(keys.size(), probes);
 
+    const bool coherent = (parts & kLights) && probes > 0 && probes < points.size();
+    // Probes found in the cache, and records for the others (filled light by light).
+    std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
+    std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
+    if (coherent && cache) {
+        for (size_t q = 0; q < probes; ++q) {
+            auto it = cache->map_.find(keys[q]);
+            if (it != cache->map_.end())
+                found[q] = &it->second;
+        }
+    }
+    size_t state_at = 0;  // this light's offset in a record's states
+    std::vector<float> tmp;
     for (const auto& l : lights_) {
-        if (!(parts & kLights)) break;
-        if (probes == 0 || probes >= points.size()) {
+        if (!(parts & kLights))
+            break;
+        if (!coherent) {
             std::vector<size_t> all(points.size());
-            for (size_t p = 0; p < all.size(); ++p) all[p] = p;
+            for (size_t p = 0; p < all.size(); ++p)
+                all[p] = p;
             EvaluateLight(l, points, all, nullptr, nullptr, out, nullptr, nullptr);
             continue;
         }
@@ -374,20 +406,46 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
         // on a light vertex's visibility, the other points take it without a ray.
         const size_t nk = l.classify.size();
         const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
-        std::vector<size_t> first(probes), rest(points.size() - probes);
-        for (size_t p = 0; p < probes; ++p) first[p] = p;
-        for (size_t p = probes; p < points.size(); ++p) rest[p - probes] = p;
+        std::vector<size_t> todo, rest(points.size() - probes);
+        for (size_t q = 0; q < probes; ++q)
+            if (!found[q])
+                todo.push_back(q);
+        for (size_t p = probes; p < points.size(); ++p)
+            rest[p - probes] = p;
         std::vector<uint8_t> cls, grid;
-        EvaluateLight(l, points, first, nullptr, nullptr, out, &cls, &grid);
-        auto agree = [&](const std::vector<uint8_t>& st, size_t n) {
-            std::vector<uint8_t> prior(st.begin(), st.begin() + std::ptrdiff_t(n));
-            for (size_t q = 1; q < probes; ++q)
-                for (size_t k = 0; k < n; ++k)
-                    if (st[q * n + k] != prior[k]) prior[k] = 0;
-            return prior;
-        };
-        const auto prior_cls = agree(cls, nk), prior_grid = agree(grid, nv);
-        EvaluateLight(l, points, rest, prior_cls.data(), prior_grid.data(), out, nullptr, nullptr);
+        tmp.assign(out.size(), 0.f);
+        EvaluateLight(l, points, todo, nullptr, nullptr, tmp, &cls, &grid);
+        // Every probe's states (nk then nv), cached or new; E added to out.
+        std::vector<uint8_t> st(probes * (nk + nv));
+        for (size_t q = 0, t = 0; q < probes; ++q) {
+            uint8_t* dst = &st[q * (nk + nv)];
+            const float* e;
+            if (found[q]) {
+                std::copy(&found[q]->states[state_at], &found[q]->states[state_at + nk + nv], dst);
+                e = &found[q]->e[9 * size_t(&l - lights_.data())];
+            } else {
+                std::copy(&cls[t * nk], &cls[(t + 1) * nk], dst);
+                std::copy(&grid[t * nv], &grid[(t + 1) * nv], dst + nk);
+                e = &tmp[q * 9];
+                fresh[q].e.insert(fresh[q].e.end(), e, e + 9);
+                fresh[q].states.insert(fresh[q].states.end(), dst, dst + nk + nv);
+                ++t;
+            }
+            for (int k = 0; k < 9; ++k)
+                out[q * 9 + size_t(k)] += e[k];
+        }
+        std::vector<uint8_t> prior(st.begin(), st.begin() + std::ptrdiff_t(nk + nv));
+        for (size_t q = 1; q < probes; ++q)
+            for (size_t k = 0; k < nk + nv; ++k)
+                if (st[q * (nk + nv) + k] != prior[k])
+                    prior[k] = 0;
+        EvaluateLight(l, points, rest, prior.data(), prior.data() + nk, out, nullptr, nullptr);
+        state_at += nk + nv;
+    }
+    if (coherent && cache) {
+        for (size_t q = 0; q < probes; ++q)
+            if (!found[q])
+                cache->map_.emplace(keys[q], std::move(fresh[q]));
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {

@@ -9,7 +9,9 @@
 #include "solve/scene.h"
 
 #include <array>
+#include <cstdint>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 namespace mebake::solve {
@@ -26,6 +28,36 @@ struct ReceiverPoint {
     Vec3f horizon{};
 };
 
+// Where a probe point sits, to find it again: the chart's geometry level it was sampled at
+// and its chart coordinates (exact float bits; node corners shared by neighbours, parents
+// and children compute the same values).
+struct ProbeKey {
+    uint32_t u = 0, v = 0, level = 0;
+    bool operator==(const ProbeKey&) const = default;
+};
+struct ProbeKeyHash {
+    size_t operator()(const ProbeKey& k) const {
+        return size_t((uint64_t(k.u) * 0x9E3779B97F4A7C15ull) ^
+                      (uint64_t(k.v) * 0xC2B2AE3D27D4EB4Full) ^ k.level);
+    }
+};
+
+// Results of probes kept across Evaluate calls on one chart: a node's corner probes are
+// its neighbours', its parent's and its children's too. Per light: E and visibility states.
+class ProbeCache {
+public:
+    void Clear() { map_.clear(); }
+    size_t size() const { return map_.size(); }
+
+private:
+    friend class DirectLight;
+    struct Record {
+        std::vector<float> e;         // 9 per light
+        std::vector<uint8_t> states;  // per light: classification then grid vertex states
+    };
+    std::unordered_map<ProbeKey, Record, ProbeKeyHash> map_;
+};
+
 class DirectLight {
 public:
     // Sampling counts come from `settings` (light_samples, sky_directions).
@@ -37,8 +69,10 @@ public:
     // probes > 0: the points lie on one small patch and the first `probes` of them surround
     // it; where all probes agree on the visibility of a light's vertex (or sub-cell corner),
     // the other points take it without tracing (reuse of visibility across a patch).
+    // With a cache and one key per probe, probes found there cost no ray (same result).
     void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
-                  size_t probes = 0) const;
+                  size_t probes = 0, ProbeCache* cache = nullptr,
+                  std::span<const ProbeKey> keys = {}) const;
     bool has_lights() const { return !lights_.empty(); }
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
@@ -67,8 +101,7 @@ private:
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                  const uint8_t* prior, std::vector<Vec3d>* e,
-                  std::vector<uint8_t>* states) const;
+                  const uint8_t* prior, std::vector<Vec3d>* e, std::vector<uint8_t>* states) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;

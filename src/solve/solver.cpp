@@ -10,6 +10,7 @@
 #include "solve/visibility.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -152,10 +153,12 @@ void Solver::RefineDirect(uint32_t chart) {
     std::vector<ReceiverPoint> all_pts;
     std::vector<Vec3f> all_albedo;
     std::vector<int> slot;  // evaluation order -> index (Gauss 0..ng^2-1, then control)
+    std::vector<ProbeKey> keys;
+    ProbeCache probe_cache;  // this chart's probes (node corners are shared)
     auto evaluate = [&](const QuadNode& node, bool control) {
         const int gl = std::min(finest, int(node.level) + 2);
         const int n_gauss = ng * ng, n_ctrl = control ? gc * gc : 0;
-        auto point = [&](int idx) {
+        auto uv = [&](int idx) {
             double s, t, w;
             if (idx < n_gauss) {
                 GaussPoint2D(ng, idx, &s, &t, &w);
@@ -163,7 +166,10 @@ void Solver::RefineDirect(uint32_t chart) {
                 s = ControlPoint(gc, (idx - n_gauss) % gc);
                 t = ControlPoint(gc, (idx - n_gauss) / gc);
             }
-            const float u = float(node.U(s)), v = float(node.V(t));
+            return std::make_pair(float(node.U(s)), float(node.V(t)));
+        };
+        auto point = [&](int idx) {
+            const auto [u, v] = uv(idx);
             auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
             return std::make_pair(
                 ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
@@ -193,9 +199,14 @@ void Solver::RefineDirect(uint32_t chart) {
             all_pts[k] = rp;
             all_albedo[k] = rho;
         }
+        keys.resize(probes);
+        for (size_t k = 0; k < probes; ++k) {
+            const auto [u, v] = uv(slot[k]);
+            keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl)};
+        }
         e9_all.assign(all_pts.size() * 9, 0.f);
         if (direct.has_lights())
-            direct.Evaluate(all_pts, e9_all, DirectLight::kLights, probes);
+            direct.Evaluate(all_pts, e9_all, DirectLight::kLights, probes, &probe_cache, keys);
         // Back to Gauss and control order.
         pts.resize(size_t(n_gauss));
         albedo.resize(size_t(n_gauss));
