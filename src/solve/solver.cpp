@@ -332,8 +332,18 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.radius = g.radius;
             if (g.area <= 0)
                 continue;
-            double u = (i + 0.5) / n, v = (j + 0.5) / n;
-            field.EvalUnshot(u, v, val);
+            // The texel's mean unshot E (2 x 2 Gauss points, exact up to cubics): quadtree
+            // leaves finer than the texel would otherwise give the value of the one leaf
+            // whose corner is the texel centre.
+            std::fill(val, val + 9, 0.f);
+            for (int q = 0; q < 4; ++q) {
+                double gs, gt, w;
+                GaussPoint2D(2, q, &gs, &gt, &w);
+                float part[9];
+                field.EvalUnshot((i + gs) / n, (j + gt) / n, part);
+                for (int k = 0; k < field.blocks(); ++k)
+                    val[k] += float(w) * part[k];
+            }
             const Material& m = scene_.MaterialOf(g.material);
             Vec3f rho = Albedo(g.material, g.color);
             for (int c = 0; c < 3; ++c) {
@@ -399,6 +409,11 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     const SolveChart& sc = charts_[receiver];
     ChartField& field = fields_[receiver];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1;
+    // A constant (M0) receiver node holds one E for its whole area, while the E of a source
+    // turns and falls off across it by ~ its size / distance (higher orders hold the linear
+    // part). M0 gathers at nodes 4x smaller against their distance: at tau 0.5 the furnace
+    // lost 0.36% per bounce, 3% at albedo 0.9.
+    const double receiver_tau = order == 0 ? 0.25 * opt_.receiver_tau : opt_.receiver_tau;
     const int finest = sc.geometry.finest_level();
     const bool radiosity = opt_.settings.radiosity;
     const float eps = RayOffset(receiver);
@@ -531,7 +546,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             const double bound =
                 dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
             const bool small =
-                dist > 0 && size_r / dist <= opt_.receiver_tau && size_e / dist <= opt_.emitter_tau;
+                dist > 0 && size_r / dist <= receiver_tau && size_e / dist <= opt_.emitter_tau;
             // A receiver node already smaller than the finest emitter samples gains nothing
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
