@@ -141,6 +141,12 @@ void Solver::RefineDirect(uint32_t chart) {
     const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
     DirectLight direct(scene_, opt_.settings, vis_, RayOffset(chart), opt_.scene_size);
     const bool radiosity = opt_.settings.radiosity;
+    // The fixed levels (min_level, sky_level) are meant for a chart as large as the scene: a
+    // chart 2^k times smaller starts k levels higher, so that node counts follow world size
+    // (lucy's 449 small charts made a million nodes at M0 otherwise).
+    const int size_levels =
+        std::min(0, int(std::ceil(std::log2(std::max(sc.scale, 1e-30) /
+                                            std::max(double(opt_.scene_size), 1e-30)))));
 
     std::vector<ReceiverPoint> pts;
     std::vector<Vec3f> albedo;
@@ -248,7 +254,11 @@ void Solver::RefineDirect(uint32_t chart) {
         // Lower orders need finer nodes for the same smooth field (E turns with the
         // surface): a constant over a node covering 20 degrees of a sphere is off by 2%,
         // which an albedo of 0.9 amplifies ninefold.
-        const int min_level = opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0);
+        const int min_level = std::max(0, opt_.min_level +
+                                              (order == 0   ? 3
+                                               : order == 1 ? 2
+                                                            : 0) +
+                                              size_levels);
         if (int(node.level) < std::min(min_level, max_level)) {
             int32_t first = field.Subdivide(n);
             for (int c = 3; c >= 0; --c)
@@ -282,7 +292,7 @@ void Solver::RefineDirect(uint32_t chart) {
     // above it) and pushed down, like indirect light.
     if (!direct.has_sky())
         return;
-    const int sky_level = std::min(max_level, opt_.sky_level);
+    const int sky_level = std::min(max_level, std::max(0, opt_.sky_level + size_levels));
     std::vector<size_t> targets;
     stack.assign(1, 0);
     while (!stack.empty()) {
