@@ -1,13 +1,13 @@
 #include "solve/direct.h"
 
-#include <algorithm>
-#include <cmath>
-#include <numbers>
-
 #include "core/check.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/visibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 
 namespace mebake::solve {
 
@@ -36,8 +36,10 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
         const Vec3d& a = poly[k];
         const Vec3d& b = poly[(k + 1) % m];
         double da = Dot(a - x, n), db = Dot(b - x, n);
-        if (da >= 0) out.push_back(a);
-        if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
+        if (da >= 0)
+            out.push_back(a);
+        if ((da >= 0) != (db >= 0))
+            out.push_back(a + (b - a) * (da / (da - db)));
     }
     return out;
 }
@@ -45,7 +47,8 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
 DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
                          const VisibilityScene& vis, float ray_offset, float scene_size)
     : vis_(vis), sky_(scene.sky), offset_(ray_offset), far_(scene_size * 100) {
-    const int per_tri = std::max(2, int(std::lround(std::sqrt(double(settings.light_samples)))));
+    const int per_tri =
+        std::max(2, int(std::ceil(std::sqrt(double(settings.light_samples)) - 1e-9)));
     for (const auto& pl : scene.lights) {
         Light l;
         l.vertices = pl.vertices;
@@ -53,33 +56,31 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
         l.two_sided = pl.two_sided;
         l.normal = PolygonNormal(pl.vertices);
         l.area = PolygonArea(pl.vertices);
-        if (l.area <= 0) continue;
+        if (l.area <= 0)
+            continue;
         Vec3d centre{};
-        for (const auto& v : l.vertices) centre += v;
+        for (const auto& v : l.vertices)
+            centre += v;
         centre = centre / double(l.vertices.size());
         // Classification points: vertices pulled 1% toward the centre, and the centre.
-        for (const auto& v : l.vertices) l.classify.push_back(Vec3f(v + (centre - v) * 0.01));
+        for (const auto& v : l.vertices)
+            l.classify.push_back(Vec3f(v + (centre - v) * 0.01));
         l.classify.push_back(Vec3f(centre));
-        // Cells: each fan triangle cut into per_tri^2 congruent triangles.
+        // Penumbra grid: per_tri cells per side of each fan triangle, a power of two so
+        // that cells halve down to it.
+        l.grid = 1;
+        while (l.grid < per_tri && l.grid < 64)
+            l.grid *= 2;
+        const int g1 = l.grid + 1;
         for (size_t t = 0; t + 2 < l.vertices.size(); ++t) {
-            const double k = per_tri;
-            auto at = [&](int a, int b) { return PolygonPoint(l.vertices, t, a / k, b / k); };
-            for (int a = 0; a < per_tri; ++a) {
-                for (int b = 0; a + b < per_tri; ++b) {
-                    l.cells.push_back({at(a, b), at(a + 1, b), at(a, b + 1)});
-                    if (a + b + 2 <= per_tri) l.cells.push_back({at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)});
+            for (int b = 0; b < g1; ++b) {
+                for (int a = 0; a < g1; ++a) {
+                    const Vec3d p =
+                        PolygonPoint(l.vertices, t, double(a) / l.grid, double(b) / l.grid);
+                    l.grid_pos.push_back(p);
+                    l.grid_target.push_back(Vec3f(p + (centre - p) * 0.01));
                 }
             }
-        }
-        // One sample per cell at a fixed pseudo-random point (an R2 low-discrepancy
-        // sequence): a shadow edge parallel to the cell rows then cuts samples at varied
-        // offsets, so the misclassified parts cancel instead of adding up along the edge.
-        for (size_t c = 0; c < l.cells.size(); ++c) {
-            double a = std::fmod(0.5 + 0.7548776662466927 * double(c + 1), 1.0);
-            double b = std::fmod(0.5 + 0.5698402909980532 * double(c + 1), 1.0);
-            if (a + b > 1) a = 1 - a, b = 1 - b;
-            const auto& t = l.cells[c];
-            l.samples.push_back(Vec3f(t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b));
         }
         lights_.push_back(std::move(l));
     }
@@ -117,72 +118,334 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
-void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
-                           int parts) const {
+// Penumbra of one light at the given points. Per point, the light's fan triangles start as
+// 2 x 2 grids of cells whose corners are tested with one ray each (the classification rays
+// give the light's own vertices); a cell whose corners agree is taken as wholly visible or
+// hidden, one whose corners disagree is split in four, down to the finest grid, where a mixed
+// cell is visible as one fixed low-discrepancy point in it is. Rays go only where a shadow
+// edge crosses the light, and all points of a level share one Embree batch.
+void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
+                           std::span<const size_t> penumbra, std::span<const uint8_t> classified,
+                           const uint8_t* prior, std::vector<Vec3d>* e,
+                           std::vector<uint8_t>* states) const {
+    e->assign(penumbra.size(), Vec3d{});
+    if (penumbra.empty())
+        return;
+    const int g = l.grid, g1 = g + 1;
+    const size_t nt = l.vertices.size() - 2, per_t = size_t(g1) * size_t(g1);
+    const size_t nv = nt * per_t, nk = l.classify.size();
+    const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+    // Vertex states per point: 0 unknown, 1 requested, 2 visible, 3 hidden.
+    std::vector<uint8_t> state(penumbra.size() * nv, 0);
+    auto vidx = [&](size_t t, int a, int b) {
+        return t * per_t + size_t(b) * size_t(g1) + size_t(a);
+    };
+    for (size_t q = 0; q < penumbra.size(); ++q) {
+        uint8_t* st = &state[q * nv];
+        if (prior)
+            std::copy(prior, prior + nv, st);
+        const uint8_t* cls = &classified[q * nk];
+        for (size_t t = 0; t < nt; ++t) {
+            st[vidx(t, 0, 0)] = cls[0] ? 3 : 2;
+            st[vidx(t, g, 0)] = cls[t + 1] ? 3 : 2;
+            st[vidx(t, 0, g)] = cls[t + 2] ? 3 : 2;
+        }
+    }
+    struct Cell {
+        uint32_t q;  // penumbra point
+        uint16_t t;  // fan triangle
+        uint8_t a[3], b[3];
+    };
+    std::vector<Cell> cur, next, finest;
+    const int start = std::min(g, 2);
+    for (uint32_t q = 0; q < penumbra.size(); ++q) {
+        for (size_t t = 0; t < nt; ++t) {
+            const int s = g / start;
+            for (int b = 0; b < g; b += s) {
+                for (int a = 0; a + b < g; a += s) {
+                    cur.push_back({q,
+                                   uint16_t(t),
+                                   {uint8_t(a), uint8_t(a + s), uint8_t(a)},
+                                   {uint8_t(b), uint8_t(b), uint8_t(b + s)}});
+                    if (a + b + 2 * s <= g)
+                        cur.push_back({q,
+                                       uint16_t(t),
+                                       {uint8_t(a + s), uint8_t(a + s), uint8_t(a)},
+                                       {uint8_t(b), uint8_t(b + s), uint8_t(b + s)}});
+                }
+            }
+        }
+    }
+    auto closed_form = [&](const Cell& c) {
+        const Vec3d tri[3] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
+                              l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
+                              l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
+        const ReceiverPoint& rp = points[penumbra[c.q]];
+        const Vec3d x(rp.position), h(rp.horizon);
+        if (Dot(h, h) == 0)
+            return VectorIrradiance(tri, 1.0, x, emission);
+        auto clipped = ClipToHalfSpace(tri, x, h);
+        return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
+    };
+    auto origin = [&](uint32_t q) {
+        const ReceiverPoint& rp = points[penumbra[q]];
+        return rp.vis_point + rp.normal * offset_;
+    };
+    SegmentBatch batch;
+    std::vector<std::pair<uint32_t, uint32_t>> asked;  // (point, vertex)
+    while (!cur.empty()) {
+        batch.Clear();
+        asked.clear();
+        for (const Cell& c : cur) {
+            for (int k = 0; k < 3; ++k) {
+                const size_t v = vidx(c.t, c.a[k], c.b[k]);
+                uint8_t& st = state[c.q * nv + v];
+                if (st != 0)
+                    continue;
+                st = 1;
+                asked.push_back({c.q, uint32_t(v)});
+                batch.AddSegment(origin(c.q), l.grid_target[v]);
+            }
+        }
+        batch.Trace(vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < asked.size(); ++r)
+            state[asked[r].first * nv + asked[r].second] = batch.occluded[r] ? 3 : 2;
+        next.clear();
+        for (const Cell& c : cur) {
+            const uint8_t* st = &state[c.q * nv];
+            const uint8_t s0 = st[vidx(c.t, c.a[0], c.b[0])], s1 = st[vidx(c.t, c.a[1], c.b[1])],
+                          s2 = st[vidx(c.t, c.a[2], c.b[2])];
+            if (s0 == s1 && s1 == s2) {
+                if (s0 == 2)
+                    (*e)[c.q] += closed_form(c);
+                continue;
+            }
+            int side = 0;
+            for (int k = 0; k < 3; ++k)
+                side = std::max({side, std::abs(int(c.a[k]) - int(c.a[(k + 1) % 3])),
+                                 std::abs(int(c.b[k]) - int(c.b[(k + 1) % 3]))});
+            if (side <= 1) {
+                finest.push_back(c);
+                continue;
+            }
+            // Midpoints of the edges 01, 12, 20; the four children.
+            const uint8_t ma[3] = {uint8_t((c.a[0] + c.a[1]) / 2), uint8_t((c.a[1] + c.a[2]) / 2),
+                                   uint8_t((c.a[2] + c.a[0]) / 2)};
+            const uint8_t mb[3] = {uint8_t((c.b[0] + c.b[1]) / 2), uint8_t((c.b[1] + c.b[2]) / 2),
+                                   uint8_t((c.b[2] + c.b[0]) / 2)};
+            next.push_back({c.q, c.t, {c.a[0], ma[0], ma[2]}, {c.b[0], mb[0], mb[2]}});
+            next.push_back({c.q, c.t, {ma[0], c.a[1], ma[1]}, {mb[0], c.b[1], mb[1]}});
+            next.push_back({c.q, c.t, {ma[2], ma[1], c.a[2]}, {mb[2], mb[1], c.b[2]}});
+            next.push_back({c.q, c.t, {ma[0], ma[1], ma[2]}, {mb[0], mb[1], mb[2]}});
+        }
+        std::swap(cur, next);
+    }
+    // Finest mixed cells: one ray to a fixed point of an R2 low-discrepancy sequence indexed
+    // by the cell, so a shadow edge parallel to cell rows cuts samples at varied offsets.
+    batch.Clear();
+    for (const Cell& c : finest) {
+        // The cell in canonical form: up (a,b) (a+1,b) (a,b+1) or down (a+1,b) (a+1,b+1) (a,b+1).
+        const int a0 = std::min({c.a[0], c.a[1], c.a[2]}), b0 = std::min({c.b[0], c.b[1], c.b[2]});
+        const bool down = c.a[0] + c.a[1] + c.a[2] - 3 * a0 == 2;
+        const uint64_t id = (uint64_t(c.t) * uint64_t(g) + uint64_t(a0)) * uint64_t(2 * g) +
+                            uint64_t(2 * b0 + (down ? 1 : 0));
+        double a = std::fmod(0.5 + 0.7548776662466927 * double(id + 1), 1.0);
+        double b = std::fmod(0.5 + 0.5698402909980532 * double(id + 1), 1.0);
+        if (a + b > 1)
+            a = 1 - a, b = 1 - b;
+        const Vec3d& p0 = l.grid_pos[down ? vidx(c.t, a0 + 1, b0) : vidx(c.t, a0, b0)];
+        const Vec3d& p1 = l.grid_pos[down ? vidx(c.t, a0 + 1, b0 + 1) : vidx(c.t, a0 + 1, b0)];
+        const Vec3d& p2 = l.grid_pos[vidx(c.t, a0, b0 + 1)];
+        batch.AddSegment(origin(c.q), Vec3f(p0 + (p1 - p0) * a + (p2 - p0) * b));
+    }
+    batch.Trace(vis_, RayKind::kPenumbra);
+    for (size_t k = 0; k < finest.size(); ++k)
+        if (!batch.occluded[k])
+            (*e)[finest[k].q] += closed_form(finest[k]);
+    if (states) {
+        for (auto& st : state)
+            st = st == 1 ? 0 : st;
+        *states = std::move(state);
+    }
+}
+
+// One light at the points `which`. prior_cls / prior_grid (may be null): visibility states
+// (2 visible, 3 hidden, 0 unknown) of the classification targets / grid vertices taken as
+// known for every point, so no ray is spent on them. cls_out / grid_out (may be null)
+// receive every point's states, for use as a prior elsewhere: a fully lit point counts as
+// seeing every vertex, an umbra point none, a point the light cannot reach is unknown.
+void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
+                                std::span<const size_t> which, const uint8_t* prior_cls,
+                                const uint8_t* prior_grid, std::span<float> out,
+                                std::vector<uint8_t>* cls_out,
+                                std::vector<uint8_t>* grid_out) const {
+    const size_t nk = l.classify.size();
+    const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+    // 1. Classify each point with a few rays (skip points the light cannot reach).
+    SegmentBatch batch;
+    std::vector<uint8_t> faces(which.size(), 0), cls(which.size() * nk, 0);
+    std::vector<std::pair<size_t, size_t>> asked;
+    for (size_t q = 0; q < which.size(); ++q) {
+        const auto& rp = points[which[q]];
+        // E does not involve the receiver's normal (that is what keeps it smooth on
+        // noisy scans): what lies below the surface is removed by visibility alone.
+        double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
+        bool above = Dot(rp.horizon, rp.horizon) == 0;
+        for (const auto& v : l.vertices)
+            above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
+        faces[q] = (side > 0 || (l.two_sided && side < 0)) && above;
+        if (!faces[q])
+            continue;
+        const Vec3f o = rp.vis_point + rp.normal * offset_;
+        for (size_t k = 0; k < nk; ++k) {
+            if (prior_cls && prior_cls[k] != 0) {
+                cls[q * nk + k] = prior_cls[k];
+                continue;
+            }
+            asked.push_back({q, k});
+            batch.AddSegment(o, l.classify[k]);
+        }
+    }
+    batch.Trace(vis_, RayKind::kClassify);
+    for (size_t r = 0; r < asked.size(); ++r)
+        cls[asked[r].first * nk + asked[r].second] = batch.occluded[r] ? 3 : 2;
+    enum : uint8_t { kAway, kLit, kUmbra, kPenumbra };
+    std::vector<uint8_t> kind(which.size(), kAway);
+    std::vector<size_t> penumbra;
+    std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
+    for (size_t q = 0; q < which.size(); ++q) {
+        if (!faces[q])
+            continue;
+        size_t vis = 0;
+        for (size_t k = 0; k < nk; ++k)
+            vis += cls[q * nk + k] == 2 ? 1 : 0;
+        kind[q] = vis == nk ? kLit : vis == 0 ? kUmbra : kPenumbra;
+        if (kind[q] != kPenumbra)
+            continue;
+        penumbra.push_back(which[q]);
+        for (size_t k = 0; k < nk; ++k)
+            classified.push_back(cls[q * nk + k] == 3 ? 1 : 0);
+    }
+    // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
+    std::vector<Vec3d> pen_e;
+    std::vector<uint8_t> pen_states;
+    Penumbra(l, points, penumbra, classified, prior_grid, &pen_e, grid_out ? &pen_states : nullptr);
+    auto add = [&](size_t p, const Vec3d& e) {
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k)
+                out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
+    };
+    for (size_t q = 0; q < penumbra.size(); ++q)
+        add(penumbra[q], pen_e[q]);
+    // 3. Fully lit points: the closed form above the point's horizon.
+    const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+    for (size_t q = 0; q < which.size(); ++q) {
+        if (kind[q] != kLit)
+            continue;
+        const size_t p = which[q];
+        const Vec3d x(points[p].position), h(points[p].horizon);
+        if (Dot(h, h) == 0) {
+            add(p, VectorIrradiance(l.vertices, 1.0, x, emission));
+        } else {
+            auto clipped = ClipToHalfSpace(l.vertices, x, h);
+            if (clipped.size() >= 3)
+                add(p, VectorIrradiance(clipped, 1.0, x, emission));
+        }
+    }
+    if (cls_out) {
+        cls_out->assign(which.size() * nk, 0);
+        for (size_t q = 0; q < which.size(); ++q)
+            if (faces[q])
+                std::copy(&cls[q * nk], &cls[q * nk] + nk, &(*cls_out)[q * nk]);
+    }
+    if (grid_out) {
+        grid_out->assign(which.size() * nv, 0);
+        size_t at = 0;
+        for (size_t q = 0; q < which.size(); ++q) {
+            uint8_t* g = &(*grid_out)[q * nv];
+            if (kind[q] == kLit || kind[q] == kUmbra)
+                std::fill(g, g + nv, kind[q] == kLit ? 2 : 3);
+            if (kind[q] == kPenumbra)
+                std::copy(&pen_states[at * nv], &pen_states[(at + 1) * nv], g), ++at;
+        }
+    }
+}
+
+void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts,
+                           size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
     CHECK_EQ(out.size(), points.size() * 9);
     std::fill(out.begin(), out.end(), 0.f);
     SegmentBatch batch;
-    std::vector<float> fraction(points.size());
+    if (cache)
+        CHECK_EQ(keys.size(), probes);
 
+    const bool coherent = (parts & kLights) && probes > 0 && probes < points.size();
+    // Probes found in the cache, and records for the others (filled light by light).
+    std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
+    std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
+    if (coherent && cache) {
+        for (size_t q = 0; q < probes; ++q) {
+            auto it = cache->map_.find(keys[q]);
+            if (it != cache->map_.end())
+                found[q] = &it->second;
+        }
+    }
+    size_t state_at = 0;  // this light's offset in a record's states
+    std::vector<float> tmp;
     for (const auto& l : lights_) {
-        if (!(parts & kLights)) break;
-        // 1. Classify each point with a few rays (skip points the light cannot reach).
-        batch.Clear();
-        std::vector<uint8_t> faces(points.size(), 0);
-        for (size_t p = 0; p < points.size(); ++p) {
-            const auto& rp = points[p];
-            // E does not involve the receiver's normal (that is what keeps it smooth on
-            // noisy scans): what lies below the surface is removed by visibility alone.
-            double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
-            bool above = Dot(rp.horizon, rp.horizon) == 0;
-            for (const auto& v : l.vertices)
-                above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
-            faces[p] = (side > 0 || (l.two_sided && side < 0)) && above;
-            if (!faces[p]) continue;
-            Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& c : l.classify) batch.AddSegment(o, c);
+        if (!(parts & kLights))
+            break;
+        if (!coherent) {
+            std::vector<size_t> all(points.size());
+            for (size_t p = 0; p < all.size(); ++p)
+                all[p] = p;
+            EvaluateLight(l, points, all, nullptr, nullptr, out, nullptr, nullptr);
+            continue;
         }
-        batch.Trace(vis_);
-        size_t at = 0;
-        std::vector<size_t> penumbra;
-        for (size_t p = 0; p < points.size(); ++p) {
-            fraction[p] = 0;
-            if (!faces[p]) continue;
-            size_t vis = 0;
-            for (size_t k = 0; k < l.classify.size(); ++k) vis += batch.occluded[at++] ? 0 : 1;
-            if (vis == l.classify.size()) fraction[p] = 1;
-            else if (vis > 0) penumbra.push_back(p);
-            else fraction[p] = 0;
+        // Points of one small patch: the probes are evaluated first; where all of them agree
+        // on a light vertex's visibility, the other points take it without a ray.
+        const size_t nk = l.classify.size();
+        const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+        std::vector<size_t> todo, rest(points.size() - probes);
+        for (size_t q = 0; q < probes; ++q)
+            if (!found[q])
+                todo.push_back(q);
+        for (size_t p = probes; p < points.size(); ++p)
+            rest[p - probes] = p;
+        std::vector<uint8_t> cls, grid;
+        tmp.assign(out.size(), 0.f);
+        EvaluateLight(l, points, todo, nullptr, nullptr, tmp, &cls, &grid);
+        // Every probe's states (nk then nv), cached or new; E added to out.
+        std::vector<uint8_t> st(probes * (nk + nv));
+        for (size_t q = 0, t = 0; q < probes; ++q) {
+            uint8_t* dst = &st[q * (nk + nv)];
+            const float* e;
+            if (found[q]) {
+                std::copy(&found[q]->states[state_at], &found[q]->states[state_at + nk + nv], dst);
+                e = &found[q]->e[9 * size_t(&l - lights_.data())];
+            } else {
+                std::copy(&cls[t * nk], &cls[(t + 1) * nk], dst);
+                std::copy(&grid[t * nv], &grid[(t + 1) * nv], dst + nk);
+                e = &tmp[q * 9];
+                fresh[q].e.insert(fresh[q].e.end(), e, e + 9);
+                fresh[q].states.insert(fresh[q].states.end(), dst, dst + nk + nv);
+                ++t;
+            }
+            for (int k = 0; k < 9; ++k)
+                out[q * 9 + size_t(k)] += e[k];
         }
-        // 2. Penumbra points: the closed form of every cell whose centroid is visible.
-        batch.Clear();
-        for (size_t p : penumbra) {
-            Vec3f o = points[p].vis_point + points[p].normal * offset_;
-            for (const auto& s : l.samples) batch.AddSegment(o, s);
-        }
-        batch.Trace(vis_);
-        const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
-        auto add = [&](size_t p, const Vec3d& e) {
-            for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k) out[p * 9 + size_t(3 * c + k)] += float(l.radiance[c] * e[k]);
-        };
-        // The closed form of a polygon above the point's horizon.
-        auto above = [&](std::span<const Vec3d> poly, size_t p) {
-            const Vec3d x(points[p].position), h(points[p].horizon);
-            if (Dot(h, h) == 0) return VectorIrradiance(poly, 1.0, x, emission);
-            auto clipped = ClipToHalfSpace(poly, x, h);
-            return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
-        };
-        at = 0;
-        for (size_t p : penumbra) {
-            Vec3d e{};
-            for (size_t k = 0; k < l.cells.size(); ++k)
-                if (!batch.occluded[at++]) e += above(l.cells[k], p);
-            add(p, e);
-        }
-        // 3. Fully lit points: the closed form.
-        for (size_t p = 0; p < points.size(); ++p)
-            if (fraction[p] > 0) add(p, above(l.vertices, p));
+        std::vector<uint8_t> prior(st.begin(), st.begin() + std::ptrdiff_t(nk + nv));
+        for (size_t q = 1; q < probes; ++q)
+            for (size_t k = 0; k < nk + nv; ++k)
+                if (st[q * (nk + nv) + k] != prior[k])
+                    prior[k] = 0;
+        EvaluateLight(l, points, rest, prior.data(), prior.data() + nk, out, nullptr, nullptr);
+        state_at += nk + nv;
+    }
+    if (coherent && cache) {
+        for (size_t q = 0; q < probes; ++q)
+            if (!found[q])
+                cache->map_.emplace(keys[q], std::move(fresh[q]));
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {
@@ -203,21 +466,24 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
                 batch.Add(o, w, below ? -1.f : far_);
             }
         }
-        batch.Trace(vis_);
+        batch.Trace(vis_, RayKind::kSky);
         for (size_t k = 0; k < batch.size(); ++k)
-            if (batch.segments[k].tfar < 0) batch.occluded[k] = 1;
+            if (batch.segments[k].tfar < 0)
+                batch.occluded[k] = 1;
         // Estimator of E = integral of L(w) V w dw with pdf cos/pi: sum L w pi / (cos N).
         const float scale = float(std::numbers::pi) / float(sky_dirs_.size());
         size_t at = 0;
         for (size_t p = 0; p < points.size(); ++p) {
             for (size_t k = 0; k < dirs.size(); ++k) {
-                if (batch.occluded[at++]) continue;
+                if (batch.occluded[at++])
+                    continue;
                 const Vec3f& w = dirs[k];
                 const float cos_up = std::max(sky_dirs_[k].z, 1e-3f);
                 const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
                 for (int c = 0; c < 3; ++c) {
                     const float l = float(sky_.radiance[c] * gain) * scale / cos_up;
-                    for (int e = 0; e < 3; ++e) out[p * 9 + size_t(3 * c + e)] += l * w[e];
+                    for (int e = 0; e < 3; ++e)
+                        out[p * 9 + size_t(3 * c + e)] += l * w[e];
                 }
             }
         }

@@ -5,12 +5,14 @@
 // fraction, in effect).
 #pragma once
 
-#include <array>
-#include <span>
-#include <vector>
-
 #include "core/vec.h"
 #include "solve/scene.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <vector>
 
 namespace mebake::solve {
 
@@ -26,6 +28,36 @@ struct ReceiverPoint {
     Vec3f horizon{};
 };
 
+// Where a probe point sits, to find it again: the chart's geometry level it was sampled at
+// and its chart coordinates (exact float bits; node corners shared by neighbours, parents
+// and children compute the same values).
+struct ProbeKey {
+    uint32_t u = 0, v = 0, level = 0;
+    bool operator==(const ProbeKey&) const = default;
+};
+struct ProbeKeyHash {
+    size_t operator()(const ProbeKey& k) const {
+        return size_t((uint64_t(k.u) * 0x9E3779B97F4A7C15ull) ^
+                      (uint64_t(k.v) * 0xC2B2AE3D27D4EB4Full) ^ k.level);
+    }
+};
+
+// Results of probes kept across Evaluate calls on one chart: a node's corner probes are
+// its neighbours', its parent's and its children's too. Per light: E and visibility states.
+class ProbeCache {
+public:
+    void Clear() { map_.clear(); }
+    size_t size() const { return map_.size(); }
+
+private:
+    friend class DirectLight;
+    struct Record {
+        std::vector<float> e;         // 9 per light
+        std::vector<uint8_t> states;  // per light: classification then grid vertex states
+    };
+    std::unordered_map<ProbeKey, Record, ProbeKeyHash> map_;
+};
+
 class DirectLight {
 public:
     // Sampling counts come from `settings` (light_samples, sky_directions).
@@ -34,8 +66,13 @@ public:
 
     enum Parts { kLights = 1, kSky = 2, kAll = 3 };
     // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.
-    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out,
-                  int parts = kAll) const;
+    // probes > 0: the points lie on one small patch and the first `probes` of them surround
+    // it; where all probes agree on the visibility of a light's vertex (or sub-cell corner),
+    // the other points take it without tracing (reuse of visibility across a patch).
+    // With a cache and one key per probe, probes found there cost no ray (same result).
+    void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
+                  size_t probes = 0, ProbeCache* cache = nullptr,
+                  std::span<const ProbeKey> keys = {}) const;
     bool has_lights() const { return !lights_.empty(); }
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
@@ -50,11 +87,21 @@ private:
         Vec3d normal;
         double area;
         std::vector<Vec3f> classify;  // few sample points: corners pulled in, centre
-        // Penumbrae: the light cut into small triangles, each visible or not as its
-        // centroid is; E sums the closed form of the visible ones.
-        std::vector<std::array<Vec3d, 3>> cells;
-        std::vector<Vec3f> samples;   // the cells' centroids
+        // Penumbrae: each fan triangle (v0, v[t+1], v[t+2]) carries a barycentric grid of
+        // `grid` cells per side. Cells are refined from a coarse level only where the
+        // visibility of their corners disagrees (a shadow edge crosses them); a finest cell
+        // with mixed corners is visible or not as one fixed low-discrepancy point in it is.
+        int grid = 8;
+        std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
+        std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)
     };
+    void EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
+                       std::span<const size_t> which, const uint8_t* prior_cls,
+                       const uint8_t* prior_grid, std::span<float> out,
+                       std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
+    void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
+                  std::span<const size_t> penumbra, std::span<const uint8_t> classified,
+                  const uint8_t* prior, std::vector<Vec3d>* e, std::vector<uint8_t>* states) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;

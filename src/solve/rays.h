@@ -1,13 +1,25 @@
 // Shadow segments gathered in batches, so visibility goes to Embree many rays at a time.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include "core/vec.h"
 #include "solve/visibility.h"
 
+#include <array>
+#include <cstdint>
+#include <vector>
+
 namespace mebake::solve {
+
+// What a batch of rays is for, counted separately so --stats shows where rays go.
+enum class RayKind : int {
+    kClassify = 0,  // area lights: lit / umbra / penumbra classification
+    kPenumbra,      // area lights: per-cell visibility in penumbrae
+    kSky,           // sky directions
+    kLink,          // indirect light: receiver point to emitter texel
+    kOther,
+    kCount
+};
+inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky", "link", "other"};
 
 struct SegmentBatch {
     std::vector<Segment> segments;
@@ -26,10 +38,12 @@ struct SegmentBatch {
     // not count as a blocker.
     void AddSegment(const Vec3f& a, const Vec3f& b) { Add(a, b - a, 0.999f); }
     // Fills `occluded` for every segment.
-    void Trace(const VisibilityScene& vis);
+    void Trace(const VisibilityScene& vis, RayKind kind = RayKind::kOther);
 };
 
 // Segments traced so far by this process (all threads), for statistics.
 uint64_t TotalRays();
+// The same per kind.
+std::array<uint64_t, size_t(RayKind::kCount)> RaysByKind();
 
 }  // namespace mebake::solve

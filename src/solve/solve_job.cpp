@@ -9,6 +9,7 @@
 #include "io/chunk_file.h"
 #include "solve/checkpoint.h"
 #include "solve/polygon_light.h"
+#include "solve/rays.h"
 #include "solve/solution.h"
 #include "solve/visibility.h"
 #include "stream/bake_dir.h"
@@ -281,8 +282,9 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["batches"] = st.batches;
     j["shots"] = st.shots;
     j["rays"] = st.rays;
-    j["seconds"] = {
-        {"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
+    for (size_t k = 0; k < st.rays_by_kind.size(); ++k)
+        j["rays_by_kind"][kRayKindNames[k]] = st.rays_by_kind[k];
+    j["seconds"] = {{"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
     j["rays_per_second"] = st.seconds_direct + st.seconds_indirect > 0
                                ? double(st.rays) / (st.seconds_direct + st.seconds_indirect)
                                : 0.0;

@@ -1,11 +1,5 @@
 #include "solve/solver.h"
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <numbers>
-#include <queue>
-
 #include "core/check.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -14,6 +8,13 @@
 #include "solve/rays.h"
 #include "solve/shading.h"
 #include "solve/visibility.h"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <queue>
 
 namespace mebake::solve {
 
@@ -24,7 +25,14 @@ double Since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
+float Luminance(const Vec3f& c) {
+    return (c.x + c.y + c.z) / 3;
+}
+
+// Nodes this many levels above the light-map texel or finer share light visibility between
+// their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
+// what the light map cannot hold anyway.
+constexpr int kCoherentLevels = 3;
 
 }  // namespace
 
@@ -33,7 +41,7 @@ struct Solver::Emitter {
         Vec3f pos, nrm, vis;
         float area = 0;
         float radius = 0;
-        Vec3f db;  // unshot radiosity (area-weighted mean over the texel)
+        Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
         float db_max = 0;  // largest luminance of db within the texel
     };
     uint32_t chart = 0;
@@ -43,12 +51,13 @@ struct Solver::Emitter {
     double scale = 1;
 };
 
-Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts, const VisibilityScene& vis,
-               SolveOptions opt)
+Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
+               const VisibilityScene& vis, SolveOptions opt)
     : scene_(scene), charts_(charts), vis_(vis), opt_(std::move(opt)) {
     const int blocks = opt_.settings.radiosity ? 3 : 9;
     fields_.reserve(charts_.size());
-    for (size_t c = 0; c < charts_.size(); ++c) fields_.emplace_back(opt_.settings.order, blocks);
+    for (size_t c = 0; c < charts_.size(); ++c)
+        fields_.emplace_back(opt_.settings.order, blocks);
     emissive_.assign(charts_.size(), 0);
     if (opt_.shoot_emission) {
         for (size_t c = 0; c < charts_.size(); ++c) {
@@ -97,8 +106,8 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
         GaussPoint2D(ng, p, &s, &t, &w);
         const float u = float(node.U(s)), v = float(node.V(t));
         auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-        pts->push_back({smp.position, smp.normal, smp.vis_point,
-                        horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
+        pts->push_back(
+            {smp.position, smp.normal, smp.vis_point, horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
         albedo->push_back(Albedo(smp.material, smp.color));
     }
 }
@@ -127,40 +136,113 @@ void Solver::RefineDirect(uint32_t chart) {
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;
     const int finest = sc.geometry.finest_level();
-    const int max_level = sc.max_level >= 0 ? sc.max_level : finest;
+    // A node's polynomial holds (M+1)^2 values per block: a node narrower than M+1 texels
+    // describes more than the light map can store, so refinement stops there.
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : finest;
+    const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
     DirectLight direct(scene_, opt_.settings, vis_, RayOffset(chart), opt_.scene_size);
     const bool radiosity = opt_.settings.radiosity;
+    // The fixed levels (min_level, sky_level) are meant for a chart as large as the scene: a
+    // chart 2^k times smaller starts k levels higher, so that node counts follow world size
+    // (lucy's 449 small charts made a million nodes at M0 otherwise).
+    const int size_levels =
+        std::min(0, int(std::ceil(std::log2(std::max(sc.scale, 1e-30) /
+                                            std::max(double(opt_.scene_size), 1e-30)))));
 
     std::vector<ReceiverPoint> pts;
     std::vector<Vec3f> albedo;
     std::vector<float> e9, vals, coeffs(size_t(field.stride()));
-    // Field values at points: E (9 blocks) or B = rho (n.E)+ (3 blocks).
-    auto evaluate = [&](const QuadNode& node, int grid, bool gauss) {
-        pts.clear();
-        albedo.clear();
+    // Field values at the node's ng x ng Gauss points (gauss_vals) and, with control, at its
+    // gc x gc control grid (ctrl_vals): E (9 blocks) or B = rho (n.E)+ (3 blocks). All points
+    // go to the direct light in one call; on small nodes the four outermost points are its
+    // probes (visibility shared across the node, DirectLight::Evaluate).
+    std::vector<float> gauss_vals, ctrl_vals, e9_all;
+    std::vector<ReceiverPoint> all_pts;
+    std::vector<Vec3f> all_albedo;
+    std::vector<int> slot;  // evaluation order -> index (Gauss 0..ng^2-1, then control)
+    std::vector<ProbeKey> keys;
+    ProbeCache probe_cache;  // this chart's probes (node corners are shared)
+    auto evaluate = [&](const QuadNode& node, bool control) {
         const int gl = std::min(finest, int(node.level) + 2);
-        for (int c = 0; c < grid; ++c) {
-            for (int a = 0; a < grid; ++a) {
-                double s, t, w;
-                if (gauss) {
-                    GaussPoint2D(grid, a + grid * c, &s, &t, &w);
-                } else {
-                    s = ControlPoint(grid, a);
-                    t = ControlPoint(grid, c);
-                }
-                const float u = float(node.U(s)), v = float(node.V(t));
-                auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-                pts.push_back({smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)});
-                albedo.push_back(Albedo(smp.material, smp.color));
+        const int n_gauss = ng * ng, n_ctrl = control ? gc * gc : 0;
+        auto uv = [&](int idx) {
+            double s, t, w;
+            if (idx < n_gauss) {
+                GaussPoint2D(ng, idx, &s, &t, &w);
+            } else {
+                s = ControlPoint(gc, (idx - n_gauss) % gc);
+                t = ControlPoint(gc, (idx - n_gauss) / gc);
+            }
+            return std::make_pair(float(node.U(s)), float(node.V(t)));
+        };
+        auto point = [&](int idx) {
+            const auto [u, v] = uv(idx);
+            auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+            return std::make_pair(
+                ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
+                Albedo(smp.material, smp.color));
+        };
+        // Probes first: the control grid's corners, or the Gauss grid's.
+        slot.clear();
+        const bool coherent = int(node.level) + kCoherentLevels >= max_level && ng > 1;
+        if (coherent) {
+            if (control) {
+                for (int c : {0, gc - 1, gc * (gc - 1), gc * gc - 1})
+                    slot.push_back(n_gauss + c);
+            } else {
+                for (int c : {0, ng - 1, ng * (ng - 1), ng * ng - 1})
+                    slot.push_back(c);
             }
         }
-        e9.assign(pts.size() * 9, 0.f);
-        if (direct.has_lights()) direct.Evaluate(pts, e9, DirectLight::kLights);
-        ToFieldValues(pts, albedo, e9, radiosity, &vals);
+        const size_t probes = slot.size();
+        for (int k = 0; k < n_gauss + n_ctrl; ++k)
+            if (std::find(slot.begin(), slot.begin() + std::ptrdiff_t(probes), k) ==
+                slot.begin() + std::ptrdiff_t(probes))
+                slot.push_back(k);
+        all_pts.resize(slot.size());
+        all_albedo.resize(slot.size());
+        for (size_t k = 0; k < slot.size(); ++k) {
+            auto [rp, rho] = point(slot[k]);
+            all_pts[k] = rp;
+            all_albedo[k] = rho;
+        }
+        keys.resize(probes);
+        for (size_t k = 0; k < probes; ++k) {
+            const auto [u, v] = uv(slot[k]);
+            keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl)};
+        }
+        e9_all.assign(all_pts.size() * 9, 0.f);
+        if (direct.has_lights())
+            direct.Evaluate(all_pts, e9_all, DirectLight::kLights, probes, &probe_cache, keys);
+        // Back to Gauss and control order.
+        pts.resize(size_t(n_gauss));
+        albedo.resize(size_t(n_gauss));
+        e9.assign(size_t(n_gauss) * 9, 0.f);
+        std::vector<ReceiverPoint> cpts(static_cast<size_t>(n_ctrl));
+        std::vector<Vec3f> calb(static_cast<size_t>(n_ctrl));
+        std::vector<float> ce9(size_t(n_ctrl) * 9);
+        for (size_t k = 0; k < slot.size(); ++k) {
+            const int idx = slot[k];
+            const float* src = &e9_all[k * 9];
+            if (idx < n_gauss) {
+                pts[size_t(idx)] = all_pts[k];
+                albedo[size_t(idx)] = all_albedo[k];
+                std::copy(src, src + 9, &e9[size_t(idx) * 9]);
+            } else {
+                const size_t c = size_t(idx - n_gauss);
+                cpts[c] = all_pts[k];
+                calb[c] = all_albedo[k];
+                std::copy(src, src + 9, &ce9[c * 9]);
+            }
+        }
+        ToFieldValues(pts, albedo, e9, radiosity, &gauss_vals);
+        if (control)
+            ToFieldValues(cpts, calb, ce9, radiosity, &ctrl_vals);
     };
     auto max_abs = [](const std::vector<float>& v) {
         float m = 0;
-        for (float x : v) m = std::max(m, std::abs(x));
+        for (float x : v)
+            m = std::max(m, std::abs(x));
         return m;
     };
 
@@ -170,7 +252,11 @@ void Solver::RefineDirect(uint32_t chart) {
     // have been refined and every node still holds its own fit: the budget degrades the
     // whole chart evenly instead of leaving the last quadrants of a depth-first walk at
     // the root's resolution.
-    const int min_level = opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0);
+    // Lower orders need finer nodes for the same smooth field (E turns with the surface):
+    // a constant over a node covering 20 degrees of a sphere is off by 2%, which an albedo
+    // of 0.9 amplifies ninefold. Nodes above min_level are split without a test.
+    const int min_level =
+        std::max(0, opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0) + size_levels);
     struct Candidate {
         float priority;
         size_t node;
@@ -179,9 +265,6 @@ void Solver::RefineDirect(uint32_t chart) {
         }
     };
     std::priority_queue<Candidate> queue;
-    // Lower orders need finer nodes for the same smooth field (E turns with the surface):
-    // a constant over a node covering 20 degrees of a sphere is off by 2%, which an albedo
-    // of 0.9 amplifies ninefold. Nodes above min_level are split without a test.
     std::vector<size_t> stack;
     auto fit = [&](size_t n) {
         const QuadNode node = field.node(n);
@@ -189,15 +272,16 @@ void Solver::RefineDirect(uint32_t chart) {
             stack.push_back(n);
             return;
         }
-        evaluate(node, ng, true);
-        float scale = max_abs(vals);
-        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+        const bool control = int(node.level) < max_level;
+        evaluate(node, control);
+        float scale = max_abs(gauss_vals);
+        ProjectGauss(order, ng, gauss_vals.data(), blocks, coeffs.data());
         std::copy(coeffs.begin(), coeffs.end(), field.value(n));
         std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
-        if (int(node.level) >= max_level) return;
-        evaluate(node, gc, false);
-        scale = std::max({scale, max_abs(vals), float(reference_ * 0.02)});
-        const float err = ControlGridError(order, gc, coeffs.data(), blocks, vals.data());
+        if (!control)
+            return;
+        scale = std::max({scale, max_abs(ctrl_vals), float(reference_ * 0.02)});
+        const float err = ControlGridError(order, gc, coeffs.data(), blocks, ctrl_vals.data());
         if (err > float(opt_.settings.tolerance) * scale)
             queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
     };
@@ -206,13 +290,15 @@ void Solver::RefineDirect(uint32_t chart) {
         const size_t n = stack.back();
         stack.pop_back();
         const int32_t first = field.Subdivide(n);
-        for (int c = 3; c >= 0; --c) fit(size_t(first + c));
+        for (int c = 3; c >= 0; --c)
+            fit(size_t(first + c));
     }
     while (!queue.empty() && field.node_count() + 4 <= opt_.max_nodes_per_chart) {
         const size_t n = queue.top().node;
         queue.pop();
         const int32_t first = field.Subdivide(n);
-        for (int c = 0; c < 4; ++c) fit(size_t(first + c));
+        for (int c = 0; c < 4; ++c)
+            fit(size_t(first + c));
         CHECK(stack.empty());
     }
     field.Pull();
@@ -222,8 +308,9 @@ void Solver::RefineDirect(uint32_t chart) {
     // The sky is smooth lighting sampled by discrete directions: its quadrature steps
     // are not detail worth refining for. It is gathered at a fixed level (or the leaves
     // above it) and pushed down, like indirect light.
-    if (!direct.has_sky()) return;
-    const int sky_level = std::min(max_level, opt_.sky_level);
+    if (!direct.has_sky())
+        return;
+    const int sky_level = std::min(max_level, std::max(0, opt_.sky_level + size_levels));
     std::vector<size_t> targets;
     stack.assign(1, 0);
     while (!stack.empty()) {
@@ -234,7 +321,8 @@ void Solver::RefineDirect(uint32_t chart) {
             targets.push_back(n);
             continue;
         }
-        for (int c = 3; c >= 0; --c) stack.push_back(size_t(node.first_child + c));
+        for (int c = 3; c >= 0; --c)
+            stack.push_back(size_t(node.first_child + c));
     }
     for (size_t n : targets) {
         const QuadNode node = field.node(n);
@@ -244,7 +332,8 @@ void Solver::RefineDirect(uint32_t chart) {
         ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
-        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        for (int k = 0; k < field.stride(); ++k)
+            pend[k] += coeffs[size_t(k)];
     }
     field.PushPending();
 }
@@ -269,9 +358,20 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.vis = g.vis_point;
             t.area = g.area;
             t.radius = g.radius;
-            if (g.area <= 0) continue;
-            double u = (i + 0.5) / n, v = (j + 0.5) / n;
-            field.EvalUnshot(u, v, val);
+            if (g.area <= 0)
+                continue;
+            // The texel's mean unshot E (2 x 2 Gauss points, exact up to cubics): quadtree
+            // leaves finer than the texel would otherwise give the value of the one leaf
+            // whose corner is the texel centre.
+            std::fill(val, val + 9, 0.f);
+            for (int q = 0; q < 4; ++q) {
+                double gs, gt, w;
+                GaussPoint2D(2, q, &gs, &gt, &w);
+                float part[9];
+                field.EvalUnshot((i + gs) / n, (j + gt) / n, part);
+                for (int k = 0; k < field.blocks(); ++k)
+                    val[k] += float(w) * part[k];
+            }
             const Material& m = scene_.MaterialOf(g.material);
             Vec3f rho = Albedo(g.material, g.color);
             for (int c = 0; c < 3; ++c) {
@@ -284,7 +384,8 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     b = rho[c] * std::max(0.f, irr);
                 }
                 // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-                if (first_shot && emissive_[chart]) b += float(std::numbers::pi) * m.emission[c];
+                if (first_shot && emissive_[chart])
+                    b += float(std::numbers::pi) * m.emission[c];
                 t.db[c] = b;
             }
             t.db_max = Luminance(t.db);
@@ -327,7 +428,8 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
     Emitter e;
     BuildEmitter(chart, first_shot, &e);
     double p = 0;
-    for (const auto& t : e.levels.back()) p += double(Luminance(t.db)) * t.area;
+    for (const auto& t : e.levels.back())
+        p += double(Luminance(t.db)) * t.area;
     return p;
 }
 
@@ -335,6 +437,11 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     const SolveChart& sc = charts_[receiver];
     ChartField& field = fields_[receiver];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1;
+    // A constant (M0) receiver node holds one E for its whole area, while the E of a source
+    // turns and falls off across it by ~ its size / distance (higher orders hold the linear
+    // part). M0 gathers at nodes 4x smaller against their distance: at tau 0.5 the furnace
+    // lost 0.36% per bounce, 3% at albedo 0.9.
+    const double receiver_tau = order == 0 ? 0.25 * opt_.receiver_tau : opt_.receiver_tau;
     const int finest = sc.geometry.finest_level();
     const bool radiosity = opt_.settings.radiosity;
     const float eps = RayOffset(receiver);
@@ -359,7 +466,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             *center = g.position;
             *radius = g.radius;
         } else {
-            auto smp = stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+            auto smp =
+                stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
             *center = smp.position;
             *radius = float(sc.scale * node.size() * 0.75);
         }
@@ -382,13 +490,17 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 for (uint32_t a = 0; a < span; ++a) {
                     const uint32_t k = (rj * span + b) * row + ri * span + a;
                     const auto& t = texels[k];
-                    if (t.area <= 0 || t.db_max <= 0) continue;
+                    if (t.area <= 0 || t.db_max <= 0)
+                        continue;
                     const Vec3d d = Vec3d(t.pos) - Vec3d(rp.position);
                     const double r2 = Dot(d, d);
-                    if (r2 < 1e-20) continue;
-                    if (Dot(d, Vec3d(rp.normal)) <= 0) continue;  // below the receiver's horizon
+                    if (r2 < 1e-20)
+                        continue;
+                    if (Dot(d, Vec3d(rp.normal)) <= 0)
+                        continue;  // below the receiver's horizon
                     const double ce = -Dot(d, Vec3d(t.nrm));
-                    if (ce <= 0) continue;                        // emitter faces away
+                    if (ce <= 0)
+                        continue;  // emitter faces away
                     Vec3d contrib;
                     if (r2 < 4 * texel_side * texel_side) {
                         // Near field: the texel as a uniform square, in closed form.
@@ -400,8 +512,10 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                         const Vec3d quad[4] = {c - au * h - av * h, c + au * h - av * h,
                                                c + au * h + av * h, c - au * h + av * h};
                         auto clipped = ClipToHalfSpace(quad, Vec3d(rp.position), Vec3d(rp.normal));
-                        if (clipped.size() < 3) continue;
-                        contrib = VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
+                        if (clipped.size() < 3)
+                            continue;
+                        contrib =
+                            VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
                     } else {
                         contrib = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
                     }
@@ -410,11 +524,13 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
                 }
             }
         }
-        if (pairs.empty()) return;
-        batch.Trace(vis_);
+        if (pairs.empty())
+            return;
+        batch.Trace(vis_, RayKind::kLink);
         e9.assign(pts.size() * 9, 0.f);
         for (size_t q = 0; q < pairs.size(); ++q) {
-            if (batch.occluded[q]) continue;
+            if (batch.occluded[q])
+                continue;
             const Pair& pr = pairs[q];
             const Vec3f& db = texels[pr.texel].db;
             for (int c = 0; c < 3; ++c)
@@ -424,7 +540,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
         ToFieldValues(pts, albedo, e9, radiosity, &vals);
         ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
-        for (int k = 0; k < field.stride(); ++k) pend[k] += coeffs[size_t(k)];
+        for (int k = 0; k < field.stride(); ++k)
+            pend[k] += coeffs[size_t(k)];
     };
 
     // Link refinement (hierarchical radiosity): a pair (receiver node, emitter region) is
@@ -444,7 +561,8 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             stack.pop_back();
             const QuadNode node = field.node(lk.node);
             const auto& et = em.levels[size_t(lk.level)][size_t(lk.j) * (1u << lk.level) + lk.i];
-            if (et.area <= 0 || et.db_max <= 0) continue;
+            if (et.area <= 0 || et.db_max <= 0)
+                continue;
             Vec3f rc;
             float rr;
             node_bounds(node, &rc, &rr);
@@ -453,11 +571,14 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             const double size_e = em.scale / double(1u << lk.level);
             const bool recv_can = !node.leaf();
             const bool emit_can = lk.level < top;
-            const double bound = dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist)
-                                          : 1e300;
-            const bool small = dist > 0 && size_r / dist <= opt_.receiver_tau &&
-                               size_e / dist <= opt_.emitter_tau;
-            if (small || bound < negligible || (!recv_can && !emit_can)) {
+            const double bound =
+                dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
+            const bool small =
+                dist > 0 && size_r / dist <= receiver_tau && size_e / dist <= opt_.emitter_tau;
+            // A receiver node already smaller than the finest emitter samples gains nothing
+            // from splitting: the samples' size bounds the link's accuracy.
+            const bool emitter_bound = !emit_can && size_r <= size_e;
+            if (small || bound < negligible || (!recv_can && !emit_can) || emitter_bound) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
                 evaluate_link(lk.node, em, lk.level, lk.i, lk.j, ls);
@@ -494,6 +615,9 @@ void Solver::Run(const Progress& progress) {
     const uint64_t rays0 = TotalRays() - stats_.rays;
     const double seconds_before = stats_.seconds_direct + stats_.seconds_indirect;
     const double indirect_before = stats_.seconds_indirect;
+    auto kinds0 = RaysByKind();
+    for (size_t k = 0; k < kinds0.size() && k < stats_.rays_by_kind.size(); ++k)
+        kinds0[k] -= stats_.rays_by_kind[k];
 
     // Reference irradiance for the refinement floor: the brightest root-level estimate.
     if (next_batch_ < 0) {
@@ -502,11 +626,13 @@ void Solver::Run(const Progress& progress) {
         for (const auto& c : charts_) {
             for (int k = 0; k < std::min(c.geometry.finest_level(), 2) + 1; ++k) {
                 for (const auto& g : c.geometry.levels[size_t(k)])
-                    if (g.area > 0) pts.push_back({g.position, g.normal, g.vis_point});
+                    if (g.area > 0)
+                        pts.push_back({g.position, g.normal, g.vis_point});
             }
         }
         std::vector<float> e(pts.size() * 9, 0.f);
-        if (!direct.empty() && !pts.empty()) direct.Evaluate(pts, e);
+        if (!direct.empty() && !pts.empty())
+            direct.Evaluate(pts, e);
         double ref = 0;
         for (size_t p = 0; p < pts.size(); ++p)
             for (int c = 0; c < 3; ++c) {
@@ -544,10 +670,12 @@ void Solver::Run(const Progress& progress) {
             total += p;
             largest = std::max(largest, p);
         }
-        if (first) stats_.emitted_power = total;
+        if (first)
+            stats_.emitted_power = total;
         stats_.unshot_power = total;
         const double fraction = stats_.emitted_power > 0 ? total / stats_.emitted_power : 0;
-        if (progress) progress(batch, fraction, TotalRays() - rays0);
+        if (progress)
+            progress(batch, fraction, TotalRays() - rays0);
         if (total <= 0 || fraction < opt_.settings.stop_fraction) {
             stats_.stop_reason = "converged";
             break;
@@ -571,7 +699,8 @@ void Solver::Run(const Progress& progress) {
         ParallelFor(0, int64_t(shooters.size()), [&](int64_t k) {
             BuildEmitter(shooters[size_t(k)], first, &emitters[size_t(k)]);
         });
-        for (uint32_t c : shooters) fields_[c].ClearUnshot();
+        for (uint32_t c : shooters)
+            fields_[c].ClearUnshot();
         ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
         stats_.shots += shooters.size();
         stats_.batches = batch + 1;
@@ -586,9 +715,14 @@ void Solver::Run(const Progress& progress) {
     }
     stats_.seconds_indirect = indirect_before + Since(t1);
     stats_.rays = TotalRays() - rays0;
+    const auto kinds1 = RaysByKind();
+    stats_.rays_by_kind.resize(kinds1.size());
+    for (size_t k = 0; k < kinds1.size(); ++k)
+        stats_.rays_by_kind[k] = kinds1[k] - kinds0[k];
     for (const auto& f : fields_) {
         for (const auto& n : f.nodes()) {
-            if (stats_.nodes_per_level.size() <= n.level) stats_.nodes_per_level.resize(n.level + 1u);
+            if (stats_.nodes_per_level.size() <= n.level)
+                stats_.nodes_per_level.resize(n.level + 1u);
             ++stats_.nodes_per_level[n.level];
             stats_.leaves += n.leaf() ? 1 : 0;
         }

@@ -55,6 +55,7 @@ struct SolveStats {
     int batches = 0;
     uint64_t shots = 0;             // chart shots
     uint64_t rays = 0;
+    std::vector<uint64_t> rays_by_kind;  // indexed by RayKind (rays.h)
     double seconds_direct = 0, seconds_indirect = 0;
     double emitted_power = 0;       // first-shot power (direct light reflected + emission)
     double unshot_power = 0;        // left when it stopped
