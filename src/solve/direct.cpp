@@ -85,25 +85,19 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
         lights_.push_back(std::move(l));
     }
     if (sky_.type != Sky::Type::None) {
-        // Cosine-weighted directions: Shirley-Chiu concentric map of a k x k grid, lifted
-        // to the hemisphere (Malley's method).
-        int k = std::max(2, int(std::lround(std::sqrt(double(settings.sky_directions)))));
-        for (int a = 0; a < k; ++a) {
-            for (int b = 0; b < k; ++b) {
-                double x = 2 * (a + 0.5) / k - 1, y = 2 * (b + 0.5) / k - 1, r, phi;
-                if (x == 0 && y == 0) {
-                    r = 0;
-                    phi = 0;
-                } else if (std::abs(x) > std::abs(y)) {
-                    r = x;
-                    phi = std::numbers::pi / 4 * (y / x);
-                } else {
-                    r = y;
-                    phi = std::numbers::pi / 2 - std::numbers::pi / 4 * (x / y);
-                }
-                double dx = r * std::cos(phi), dy = r * std::sin(phi);
-                double dz = std::sqrt(std::max(0.0, 1 - dx * dx - dy * dy));
-                sky_dirs_.push_back(Vec3f(float(dx), float(dy), float(dz)));
+        // Uniform directions (pdf 1 / (2 pi)), stratified in up . w (k rings of equal
+        // area, midpoints) and azimuth (k per ring, each ring turned by the golden angle).
+        // Not cosine-weighted about up: E . n for a tilted n weighs near-horizon directions
+        // by tan(zenith) against that density, and an 11 x 11 cosine grid missed 24% of a
+        // vertical face's sky. This rule is exact for an upward face (the rings' mean
+        // height is 1/2) and within 0.5% for most tilts (1.5% facing nearly down).
+        const int k = std::max(2, int(std::lround(std::sqrt(double(settings.sky_directions)))));
+        for (int i = 0; i < k; ++i) {
+            const double z = (i + 0.5) / k, radius = std::sqrt(1 - z * z);
+            for (int j = 0; j < k; ++j) {
+                const double phi = 2 * std::numbers::pi * (j + 0.5 + 0.618034 * i) / k;
+                sky_dirs_.push_back(
+                    Vec3f(float(radius * std::cos(phi)), float(radius * std::sin(phi)), float(z)));
             }
         }
     }
@@ -470,18 +464,19 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
         for (size_t k = 0; k < batch.size(); ++k)
             if (batch.segments[k].tfar < 0)
                 batch.occluded[k] = 1;
-        // Estimator of E = integral of L(w) V w dw with pdf cos/pi: sum L w pi / (cos N).
-        const float scale = float(std::numbers::pi) / float(sky_dirs_.size());
+        // Estimator of E = integral of L(w) V w dw with the uniform pdf 1 / (2 pi):
+        // sum L w 2 pi / N.
+        const float scale = 2 * float(std::numbers::pi) / float(sky_dirs_.size());
         size_t at = 0;
         for (size_t p = 0; p < points.size(); ++p) {
             for (size_t k = 0; k < dirs.size(); ++k) {
                 if (batch.occluded[at++])
                     continue;
                 const Vec3f& w = dirs[k];
-                const float cos_up = std::max(sky_dirs_[k].z, 1e-3f);
+                const float cos_up = sky_dirs_[k].z;
                 const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
                 for (int c = 0; c < 3; ++c) {
-                    const float l = float(sky_.radiance[c] * gain) * scale / cos_up;
+                    const float l = float(sky_.radiance[c] * gain) * scale;
                     for (int e = 0; e < 3; ++e)
                         out[p * 9 + size_t(3 * c + e)] += l * w[e];
                 }

@@ -81,6 +81,18 @@ Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
         .normal;
 }
 
+Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
+                       const stream::SurfaceSample& smp) {
+    // Rays start from the finest geometry, not from the coarser level the point's E is
+    // sampled at: coarse texels average positions, which lie inside a convex surface by
+    // the sagitta (a texel of 1/16 of a unit sphere's chart: 3e-3, six times the ray
+    // offset), so rays from there hit the surface they leave and the sky went dark
+    // between texel centres.
+    const int finest = sc.geometry.finest_level();
+    return level >= finest ? smp.vis_point
+                           : stream::SampleBilinear(sc.geometry, finest, u, v).vis_point;
+}
+
 float Solver::RayOffset(uint32_t chart) const {
     // Shadow rays start half a light-map texel off the surface: shadows of bumps smaller
     // than a texel cannot be represented by the light map (that detail comes back through
@@ -106,8 +118,8 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
         GaussPoint2D(ng, p, &s, &t, &w);
         const float u = float(node.U(s)), v = float(node.V(t));
         auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-        pts->push_back(
-            {smp.position, smp.normal, smp.vis_point, horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
+        pts->push_back({smp.position, smp.normal, VisPoint(sc, gl, u, v, smp),
+                        horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
         albedo->push_back(Albedo(smp.material, smp.color));
     }
 }
@@ -178,8 +190,8 @@ void Solver::RefineDirect(uint32_t chart) {
         auto point = [&](int idx) {
             const auto [u, v] = uv(idx);
             auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
-            return std::make_pair(
-                ReceiverPoint{smp.position, smp.normal, smp.vis_point, HorizonNormal(sc, u, v)},
+            return std::make_pair(ReceiverPoint{smp.position, smp.normal,
+                                                VisPoint(sc, gl, u, v, smp), HorizonNormal(sc, u, v)},
                 Albedo(smp.material, smp.color));
         };
         // Probes first: the control grid's corners, or the Gauss grid's.

@@ -107,6 +107,8 @@ private:
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
+    static Vec3f VisPoint(const SolveChart& sc, int level, float u, float v,
+                          const stream::SurfaceSample& smp);
     void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,
                      std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const;
     static void ToFieldValues(const std::vector<ReceiverPoint>& pts,
