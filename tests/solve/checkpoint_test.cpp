@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "patch_fixture.h"
 #include "solve/polygon_light.h"
 #include "solve/visibility.h"
 
@@ -20,7 +21,7 @@ namespace mebake::solve {
 namespace {
 
 namespace fs = std::filesystem;
-using Surface = std::function<Vec3d(double, double)>;
+using testing::Surface;
 
 // An open box (five faces of the unit cube seen from inside) lit by a small square light
 // below its ceiling: several bounces of interreflection.
@@ -51,50 +52,9 @@ struct Box {
     }
 
     void Add(const Surface& f, int res) {
-        SolveChart chart;
-        auto& img = chart.geometry;
-        img.resolution = uint32_t(res);
-        int levels = 0;
-        while ((1 << levels) < res)
-            ++levels;
-        img.levels.resize(size_t(levels) + 1);
-        auto& fine = img.levels.back();
-        fine.resize(size_t(res) * res);
-        const double h = 1.0 / res, e = 1e-5;
-        for (int j = 0; j < res; ++j) {
-            for (int i = 0; i < res; ++i) {
-                double u = (i + 0.5) * h, v = (j + 0.5) * h;
-                Vec3d pu = (f(u + e, v) - f(u - e, v)) / (2 * e);
-                Vec3d pv = (f(u, v + e) - f(u, v - e)) / (2 * e);
-                Vec3d n = Cross(pu, pv);
-                stream::GeometryTexel& t = fine[size_t(j) * res + i];
-                t.position = Vec3f(f(u, v));
-                t.normal = Vec3f(Normalize(n));
-                t.vis_point = t.position;
-                t.color = Vec3f(-1, -1, -1);
-                t.area = float(Length(n) * h * h);
-                t.coverage = 1;
-                t.radius = float(0.75 * h * (Length(pu) + Length(pv)));
-                t.material = 0;
-            }
-        }
-        img.BuildPyramid();
-        chart.scale = 1;
-        charts.push_back(chart);
-        std::vector<float> xyz;
-        std::vector<uint32_t> tris;
-        for (int j = 0; j <= res; ++j)
-            for (int i = 0; i <= res; ++i) {
-                Vec3d q = f(i * h, j * h);
-                xyz.insert(xyz.end(), {float(q.x), float(q.y), float(q.z)});
-            }
-        for (int j = 0; j < res; ++j)
-            for (int i = 0; i < res; ++i) {
-                uint32_t a = uint32_t(j * (res + 1) + i), b = a + 1, c = a + uint32_t(res) + 1,
-                         d = c + 1;
-                tris.insert(tris.end(), {a, b, d, a, d, c});
-            }
-        vis.AddTriangles(xyz, tris, "box");
+        testing::Patch p = testing::MakePatch(f, res, 0, 1);
+        charts.push_back(std::move(p.chart));
+        vis.AddTriangles(p.xyz, p.tris, "box");
     }
 };
 

@@ -4,6 +4,7 @@
 #include "solve/solver.h"
 
 #include "core/parallel.h"
+#include "patch_fixture.h"
 #include "solve/direct.h"
 #include "solve/polygon_light.h"
 #include "solve/shading.h"
@@ -19,60 +20,9 @@
 namespace mebake::solve {
 namespace {
 
-using Surface = std::function<Vec3d(double, double)>;
-
-// A parametric patch as a chart: its geometry image at `res` x `res` texels and its
-// triangles for visibility.
-struct Patch {
-    SolveChart chart;
-    std::vector<float> xyz;
-    std::vector<uint32_t> tris;
-};
-
-Patch MakePatch(const Surface& f, int res, uint32_t material, double scale) {
-    Patch p;
-    auto& img = p.chart.geometry;
-    img.resolution = uint32_t(res);
-    int levels = 0;
-    while ((1 << levels) < res)
-        ++levels;
-    img.levels.resize(size_t(levels) + 1);
-    auto& fine = img.levels.back();
-    fine.resize(size_t(res) * res);
-    const double h = 1.0 / res, e = 1e-5;
-    for (int j = 0; j < res; ++j) {
-        for (int i = 0; i < res; ++i) {
-            double u = (i + 0.5) * h, v = (j + 0.5) * h;
-            Vec3d pu = (f(u + e, v) - f(u - e, v)) / (2 * e);
-            Vec3d pv = (f(u, v + e) - f(u, v - e)) / (2 * e);
-            Vec3d n = Cross(pu, pv);
-            stream::GeometryTexel& t = fine[size_t(j) * res + i];
-            t.position = Vec3f(f(u, v));
-            t.normal = Vec3f(Normalize(n));
-            t.vis_point = t.position;
-            t.color = Vec3f(-1, -1, -1);
-            t.area = float(Length(n) * h * h);
-            t.coverage = 1;
-            t.radius = float(0.75 * h * (Length(pu) + Length(pv)));
-            t.material = material;
-        }
-    }
-    img.BuildPyramid();
-    p.chart.scale = scale;
-    // Visibility mesh: the (res+1)^2 grid of corners.
-    for (int j = 0; j <= res; ++j)
-        for (int i = 0; i <= res; ++i) {
-            Vec3d q = f(i * h, j * h);
-            p.xyz.insert(p.xyz.end(), {float(q.x), float(q.y), float(q.z)});
-        }
-    for (int j = 0; j < res; ++j)
-        for (int i = 0; i < res; ++i) {
-            uint32_t a = uint32_t(j * (res + 1) + i), b = a + 1, c = a + uint32_t(res) + 1,
-                     d = c + 1;
-            p.tris.insert(p.tris.end(), {a, b, d, a, d, c});
-        }
-    return p;
-}
+using testing::MakePatch;
+using testing::Patch;
+using testing::Surface;
 
 struct TestScene {
     Scene scene;
