@@ -32,7 +32,7 @@ struct ChartBuildOptions {
     // Cheaper than the library defaults (16 and 6). Measured: mean area distortion bunny
     // 0.28% -> 0.30%, lucy 0.45% -> 0.51%; CPU time of the whole ingest -20% (1M sphere)
     // to -35% (lucy). Charts over max_distortion are still split.
-    int refine_iterations = 10;            // local/global iterations of the parameterization
+    int refine_iterations = 8;             // local/global iterations of the parameterization
     int lloyd_iterations = 4;              // segmentation passes before the first bound check
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
