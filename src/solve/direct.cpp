@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 
 namespace mebake::solve {
 
@@ -385,30 +386,29 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
         }
     }
     size_t state_at = 0;  // this light's offset in a record's states
-    std::vector<float> tmp;
+    std::vector<float> probe_e;
+    // Without probes every point is evaluated on its own; with them, the points after the
+    // probes take the probes' agreement as a prior.
+    std::vector<size_t> others(points.size() - (coherent ? probes : 0));
+    std::iota(others.begin(), others.end(), coherent ? probes : 0);
     for (const auto& l : lights_) {
         if (!(parts & kLights))
             break;
         if (!coherent) {
-            std::vector<size_t> all(points.size());
-            for (size_t p = 0; p < all.size(); ++p)
-                all[p] = p;
-            EvaluateLight(l, points, all, nullptr, nullptr, out, nullptr, nullptr);
+            EvaluateLight(l, points, others, nullptr, nullptr, out, nullptr, nullptr);
             continue;
         }
         // Points of one small patch: the probes are evaluated first; where all of them agree
         // on a light vertex's visibility, the other points take it without a ray.
         const size_t nk = l.classify.size();
         const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
-        std::vector<size_t> todo, rest(points.size() - probes);
+        std::vector<size_t> uncached;  // probes not in the cache: traced now
         for (size_t q = 0; q < probes; ++q)
             if (!found[q])
-                todo.push_back(q);
-        for (size_t p = probes; p < points.size(); ++p)
-            rest[p - probes] = p;
+                uncached.push_back(q);
         std::vector<uint8_t> cls, grid;
-        tmp.assign(out.size(), 0.f);
-        EvaluateLight(l, points, todo, nullptr, nullptr, tmp, &cls, &grid);
+        probe_e.assign(out.size(), 0.f);
+        EvaluateLight(l, points, uncached, nullptr, nullptr, probe_e, &cls, &grid);
         // Every probe's states (nk then nv), cached or new; E added to out.
         std::vector<uint8_t> st(probes * (nk + nv));
         for (size_t q = 0, t = 0; q < probes; ++q) {
@@ -420,7 +420,7 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             } else {
                 std::copy(&cls[t * nk], &cls[(t + 1) * nk], dst);
                 std::copy(&grid[t * nv], &grid[(t + 1) * nv], dst + nk);
-                e = &tmp[q * 9];
+                e = &probe_e[q * 9];
                 fresh[q].e.insert(fresh[q].e.end(), e, e + 9);
                 fresh[q].states.insert(fresh[q].states.end(), dst, dst + nk + nv);
                 ++t;
@@ -433,7 +433,7 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             for (size_t k = 0; k < nk + nv; ++k)
                 if (st[q * (nk + nv) + k] != prior[k])
                     prior[k] = 0;
-        EvaluateLight(l, points, rest, prior.data(), prior.data() + nk, out, nullptr, nullptr);
+        EvaluateLight(l, points, others, prior.data(), prior.data() + nk, out, nullptr, nullptr);
         state_at += nk + nv;
     }
     if (coherent && cache) {
@@ -443,7 +443,7 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     }
 
     if (sky_.type != Sky::Type::None && (parts & kSky)) {
-        // Fixed world-frame directions about the sky's up axis (cosine-weighted), so E
+        // Fixed world-frame directions about the sky's up axis (uniform), so E
         // changes with position only where visibility does.
         batch.Clear();
         const Vec3f up(sky_.up);

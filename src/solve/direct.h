@@ -1,7 +1,7 @@
 // Direct light at receiver points: polygonal area lights by Lambert's closed form
 // with visibility classified per point (lit, umbra or penumbra, in the spirit of seed
 // 002's extremal-boundary pass: a few rays decide, many rays only in penumbra), and the
-// sky by stratified cosine-weighted directions (the bent normal times the unoccluded
+// sky by uniform directions stratified in height and azimuth (the bent normal times the unoccluded
 // fraction, in effect).
 #pragma once
 
@@ -105,7 +105,7 @@ private:
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;
-    std::vector<Vec3f> sky_dirs_;  // cosine-weighted stratified directions about +z
+    std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
     float offset_, far_;
 };
 
