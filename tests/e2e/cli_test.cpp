@@ -1,14 +1,13 @@
 // The real mebake binary on real data: `info` counts every shared scan as the data README
 // says, `convert` round-trips through pipes, bad input and bad usage give clear errors
 // and the documented exit codes, and a small bake runs end to end.
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-#include <sys/wait.h>
+#include "run.h"
 
-#include <array>
-#include <cstdio>
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <unistd.h>
 
@@ -16,58 +15,47 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-    int code;
-    std::string out;
-};
-
-// Runs a shell command line; returns its exit code and stdout (stderr merged if asked).
-Result Sh(const std::string& cmd) {
-    Result r{-1, {}};
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-    int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using mebake::e2e::Capture;
 
 const std::string kBin = MEBAKE_BINARY;
 const std::string kData = MEBAKE_SHARED_DATA;
 
-std::string Scan(const char* name) { return kData + "/scans/" + name; }
+std::string Scan(const char* name) {
+    return kData + "/scans/" + name;
+}
 
 TEST(Cli, InfoCountsEverySharedScan) {
-    if (!fs::exists(kData)) GTEST_SKIP() << "../shared/data is absent";
+    if (!fs::exists(kData))
+        GTEST_SKIP() << "../shared/data is absent";
     struct Case {
         const char* file;
         uint64_t faces;
     };
     // Triangle counts from ../shared/data/README.md.
-    const Case cases[] = {{"igea.ply", 268686},        {"nefertiti.obj", 99938},
-                          {"horse.ply", 96966},        {"lucy.ply", 99970},
-                          {"pepper.ply", 29956},       {"turbineblade.ply", 199034},
-                          {"bun_zipper.ply", 69451},   {"bun_zipper_res2.ply", 16301},
+    const Case cases[] = {{"igea.ply", 268686},          {"nefertiti.obj", 99938},
+                          {"horse.ply", 96966},          {"lucy.ply", 99970},
+                          {"pepper.ply", 29956},         {"turbineblade.ply", 199034},
+                          {"bun_zipper.ply", 69451},     {"bun_zipper_res2.ply", 16301},
                           {"bun_zipper_res3.ply", 3851}, {"bun_zipper_res4.ply", 948}};
     for (const auto& c : cases) {
-        auto r = Sh(kBin + " info --json " + Scan(c.file));
+        auto r = Capture(kBin + " info --json " + Scan(c.file));
         ASSERT_EQ(r.code, 0) << c.file;
         auto j = nlohmann::json::parse(r.out);
         EXPECT_EQ(j["triangles"].get<uint64_t>(), c.faces) << c.file;
     }
-    auto j = nlohmann::json::parse(Sh(kBin + " info --json " + Scan("bun_zipper.ply")).out);
+    auto j = nlohmann::json::parse(Capture(kBin + " info --json " + Scan("bun_zipper.ply")).out);
     EXPECT_EQ(j["vertices"].get<uint64_t>(), 35947u);
     EXPECT_EQ(j["unreferenced_vertices"].get<uint64_t>(), 1113u);
 }
 
 TEST(Cli, InfoReadsEverySceneMesh) {
-    if (!fs::exists(kData)) GTEST_SKIP() << "../shared/data is absent";
+    if (!fs::exists(kData))
+        GTEST_SKIP() << "../shared/data is absent";
     int n = 0;
     for (const auto& e : fs::recursive_directory_iterator(kData + "/scenes")) {
-        if (e.path().extension() != ".obj") continue;
-        auto r = Sh(kBin + " info --json '" + e.path().string() + "'");
+        if (e.path().extension() != ".obj")
+            continue;
+        auto r = Capture(kBin + " info --json '" + e.path().string() + "'");
         EXPECT_EQ(r.code, 0) << e.path();
         ++n;
     }
@@ -75,17 +63,20 @@ TEST(Cli, InfoReadsEverySceneMesh) {
 }
 
 TEST(Cli, ConvertRoundTripsThroughPipesExactly) {
-    if (!fs::exists(kData)) GTEST_SKIP() << "../shared/data is absent";
+    if (!fs::exists(kData))
+        GTEST_SKIP() << "../shared/data is absent";
     fs::path tmp = fs::temp_directory_path() / ("mebake-cli-" + std::to_string(::getpid()));
     fs::create_directories(tmp);
     std::string a = (tmp / "a.ply").string(), b = (tmp / "b.ply").string();
     // binary LE -> ascii (pipe) -> big-endian (pipe) -> binary LE file
-    auto r = Sh(kBin + " convert " + Scan("horse.ply") + " " + a + " && " + kBin + " convert " + a +
-                 " - --ascii | " + kBin + " convert - - --format ply --big-endian | " + kBin +
-                 " convert - " + b + " --format ply");
+    auto r =
+        Capture(kBin + " convert " + Scan("horse.ply") + " " + a + " && " + kBin + " convert " + a +
+                " - --ascii | " + kBin + " convert - - --format ply --big-endian | " + kBin +
+                " convert - " + b + " --format ply");
     ASSERT_EQ(r.code, 0);
     std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
-    std::string sa((std::istreambuf_iterator<char>(fa)), {}), sb((std::istreambuf_iterator<char>(fb)), {});
+    std::string sa((std::istreambuf_iterator<char>(fa)), {}),
+        sb((std::istreambuf_iterator<char>(fb)), {});
     EXPECT_FALSE(sa.empty());
     EXPECT_EQ(sa, sb);
     fs::remove_all(tmp);
@@ -101,19 +92,25 @@ TEST(Cli, BadInputAndUsageGiveClearErrorsAndExitCodes) {
              "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
              "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
     }
-    auto r = Sh(kBin + " info " + bad + " 2>&1");
+    auto r = Capture(kBin + " info " + bad + " 2>&1");
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.out.find(bad), std::string::npos) << r.out;
-    r = Sh(kBin + " info " + (tmp / "missing.ply").string() + " 2>&1");
+    r = Capture(kBin + " info " + (tmp / "missing.ply").string() + " 2>&1");
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.out.find("missing.ply"), std::string::npos) << r.out;
-    EXPECT_EQ(Sh(kBin + " info 2>&1").code, 2);
-    EXPECT_EQ(Sh(kBin + " frobnicate 2>&1").code, 2);
-    EXPECT_EQ(Sh(kBin + " ingest " + bad + " -o " + (tmp / "x").string() + " --memory banana 2>&1").code, 2);
+    EXPECT_EQ(Capture(kBin + " info 2>&1").code, 2);
+    EXPECT_EQ(Capture(kBin + " frobnicate 2>&1").code, 2);
+    EXPECT_EQ(
+        Capture(kBin + " ingest " + bad + " -o " + (tmp / "x").string() + " --memory banana 2>&1")
+            .code,
+        2);
     // An existing output is not overwritten without --force, and stays intact.
     std::string keep = (tmp / "keep.ply").string();
-    { std::ofstream f(keep); f << "precious"; }
-    EXPECT_EQ(Sh(kBin + " convert " + bad + " " + keep + " 2>&1").code, 2);
+    {
+        std::ofstream f(keep);
+        f << "precious";
+    }
+    EXPECT_EQ(Capture(kBin + " convert " + bad + " " + keep + " 2>&1").code, 2);
     std::ifstream f(keep);
     std::string s((std::istreambuf_iterator<char>(f)), {});
     EXPECT_EQ(s, "precious");
@@ -123,12 +120,15 @@ TEST(Cli, BadInputAndUsageGiveClearErrorsAndExitCodes) {
 TEST(Cli, BakeSampleEndToEnd) {
     fs::path tmp = fs::temp_directory_path() / ("mebake-cli-bake-" + std::to_string(::getpid()));
     std::string sample = std::string(MEBAKE_SOURCE_DIR) + "/data/samples/terrain.ply";
-    auto r = Sh(kBin + " -q bake " + sample + " -o " + tmp.string() + " --lightmap-resolution 256");
+    auto r =
+        Capture(kBin + " -q bake " + sample + " -o " + tmp.string() + " --lightmap-resolution 256");
     ASSERT_EQ(r.code, 0);
-    for (const char* f : {"lightmap.exr", "lightmap.png", "baked.glb", "vertex_colors.ply", "render.png"})
+    for (const char* f :
+         {"lightmap.exr", "lightmap.png", "baked.glb", "vertex_colors.ply", "render.png"})
         EXPECT_TRUE(fs::exists(tmp / f)) << f;
     // The vertex-coloured PLY keeps the input's vertex count.
-    auto j = nlohmann::json::parse(Sh(kBin + " info --json " + (tmp / "vertex_colors.ply").string()).out);
+    auto j = nlohmann::json::parse(
+        Capture(kBin + " info --json " + (tmp / "vertex_colors.ply").string()).out);
     EXPECT_EQ(j["vertices"].get<uint64_t>(), 2601u);
     EXPECT_TRUE(j["properties"]["colors"].get<bool>());
     fs::remove_all(tmp);

@@ -2,9 +2,11 @@
 // pipeline (ingest, solve, render) and compares the linear EXR with a stored reference
 // image, tests/data/cornell_original.exr. The reference was rendered by mebake itself
 // (its accuracy against an independent path tracer is what bench/accuracy measures); this
-// test guards against regressions in any stage that would change what a user sees. Regenerate it deliberately with MEBAKE_UPDATE_REFERENCE=1 after a change that is
-// meant to alter the image, and say why in the commit.
+// test guards against regressions in any stage that would change what a user sees. Regenerate it
+// deliberately with MEBAKE_UPDATE_REFERENCE=1 after a change that is meant to alter the image, and
+// say why in the commit.
 #include "io/exr_writer.h"
+#include "run.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +14,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace mebake {
@@ -20,11 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int Mebake(const std::string& args) {
-    const std::string cmd = std::string("'") + MEBAKE_BINARY + "' -q " + args;
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using e2e::Mebake;
 
 double Luminance(const io::ExrImage& im, int x, int y) {
     const int r = im.Channel("R"), g = im.Channel("G"), b = im.Channel("B");
@@ -51,9 +48,9 @@ TEST(CornellRender, MatchesTheStoredReference) {
     fs::create_directories(dir);
     const std::string bake = (dir / "cb.mebake").string();
     const std::string image = (dir / "cb.exr").string();
-    ASSERT_EQ(Mebake("ingest '" + obj + "' -o '" + bake + "' --lightmap-resolution 512"), 0);
-    ASSERT_EQ(Mebake("solve '" + bake + "'"), 0);
-    ASSERT_EQ(Mebake("render '" + bake +
+    ASSERT_EQ(Mebake("-q ingest '" + obj + "' -o '" + bake + "' --lightmap-resolution 512"), 0);
+    ASSERT_EQ(Mebake("-q solve '" + bake + "'"), 0);
+    ASSERT_EQ(Mebake("-q render '" + bake +
                      "' --eye 0 1 3.4 --target 0 1 0 --fov 40 --size 160x120 "
                      "--background 0 0 0 --float -o '" +
                      image + "'"),

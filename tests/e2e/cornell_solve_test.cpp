@@ -2,6 +2,8 @@
 // (OBJ/MTL, its lamp lit as an exact polygon light) is ingested and solved with
 // --threads 1 and --threads 2; both must succeed and write identical solution bytes.
 // Skipped when the shared data is absent.
+#include "run.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -9,7 +11,6 @@
 #include <fstream>
 #include <iterator>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace mebake {
@@ -17,11 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int Mebake(const std::string& args) {
-    const std::string cmd = std::string("'") + MEBAKE_BINARY + "' " + args + " 2>/dev/null";
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using e2e::Mebake;
 
 std::string Slurp(const std::string& path) {
     std::ifstream f(path, std::ios::binary);

@@ -7,6 +7,7 @@
 #include "io/exr_writer.h"
 #include "io/mesh_format.h"
 #include "io/png_writer.h"
+#include "run.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +17,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace mebake {
@@ -24,11 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int Mebake(const std::string& args) {
-    const std::string cmd = std::string("'") + MEBAKE_BINARY + "' " + args + " 2>/dev/null";
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using e2e::Mebake;
 
 struct Count : io::MeshSink {
     uint64_t vertices = 0, faces = 0;

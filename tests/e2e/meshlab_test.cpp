@@ -5,13 +5,13 @@
 // (scripts/test.sh installs them when it can).
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
+#include "run.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace mebake {
@@ -19,10 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int Shell(const std::string& cmd) {
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using e2e::Shell;
 
 struct Collect : io::MeshSink {
     std::vector<Vec3f> position, color;
@@ -58,8 +55,8 @@ TEST(MeshLab, LoadsTheVertexColouredPly) {
     ASSERT_EQ(Shell(mb + "ingest '" + mesh + "' -o '" + bake + "' --lightmap-resolution 128"), 0);
     ASSERT_EQ(Shell(mb + "solve '" + bake + "' --max-bounces 1"), 0);
     ASSERT_EQ(Shell(mb + "export '" + bake + "' --vertex-colors '" + ours + "'"), 0);
-    ASSERT_EQ(Shell("cd '" + dir.string() + "' && xvfb-run -a meshlabserver -i '" + ours + "' -o '" +
-                  theirs + "' -m vc > meshlab.log 2>&1"),
+    ASSERT_EQ(Shell("cd '" + dir.string() + "' && xvfb-run -a meshlabserver -i '" + ours +
+                    "' -o '" + theirs + "' -m vc > meshlab.log 2>&1"),
               0)
         << "meshlabserver failed; see " << dir / "meshlab.log";
     const Collect a = Read(ours), b = Read(theirs);

@@ -3,6 +3,8 @@
 // PLY streams out to the next tool, which must read every vertex and face of the input
 // with colours. Peak memory of the bake (measured by /usr/bin/time, as the benchmarks do)
 // must stay under the --memory budget.
+#include "run.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -12,7 +14,6 @@
 #include <regex>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace mebake {
@@ -45,8 +46,7 @@ TEST(PipeBake, GeneratorToBakeToInfo) {
         "' -n 60000 --seed 3 2> gen.txt | /usr/bin/time -f 'peak_kib=%M' -o time.txt '" +
         MEBAKE_BINARY + "' -q bake - -o - --memory " + std::to_string(kBudgetMiB) +
         "M 2> bake.txt | '" + MEBAKE_BINARY + "' info - > info.txt 2>&1";
-    const int status = std::system(("bash -c \"" + cmd + "\"").c_str());
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
+    ASSERT_EQ(e2e::Shell("bash -c \"" + cmd + "\""), 0)
         << "pipeline failed:\n"
         << Slurp(dir / "bake.txt") << Slurp(dir / "info.txt");
 
