@@ -142,6 +142,10 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                     continue;
                 }
                 ++count;
+                // The back of a surface is black, as the solver and the reference path
+                // tracer have it: light is solved on the side the triangles face.
+                if (h.ng_x * dirs[i].x + h.ng_y * dirs[i].y + h.ng_z * dirs[i].z >= 0)
+                    continue;
                 const ChartShader& sh = *shaders[geom_chart[h.geom_id]];
                 const ShadingPoint p = sh.AtTriangle(h.prim_id, 1 - h.u - h.v, h.u, h.v);
                 sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) / kPi;

@@ -3,8 +3,8 @@
 // chart, so a hit's geometry id is the chart and its primitive id the tile triangle); the
 // hit is shaded with the hit barycentrics' uv, normal and colour (bake_view.h ChartShader):
 // radiance B/pi, or with `glossy` the seed paper's view-dependent approximation
-// L ~ Le + |E| fr(x, x + E, z). A back-face hit is shaded like the front (the solution
-// lives on the front side; scans are one-sided). Rays that miss see the background: the
+// L ~ Le + |E| fr(x, x + E, z). A back-face hit is black: light is solved on the side the
+// triangles face, and nothing lights the back (the reference path tracer agrees). Rays that miss see the background: the
 // given colour, else the scene's sky radiance (uniform, or CIE overcast by elevation).
 //
 // Deterministic: each pixel depends on its own rays only; rows run in parallel through

@@ -81,6 +81,22 @@ TEST_F(RenderTest, HeadOnQuadShowsRadianceAndBackground) {
     EXPECT_GT(img.hits, uint64_t(on[0] + on[1]) - 1);
 }
 
+TEST_F(RenderTest, BackOfTheSquaresIsBlack) {
+    ro_.camera.eye = Vec3d(1, 0.5, -3);  // below the squares, which face +z
+    const RenderedImage img = Render(view_, ro_);
+    int black = 0;
+    for (int py = 0; py < img.height; ++py)
+        for (int px = 0; px < img.width; ++px) {
+            const Vec3f v = img.At(px, py);
+            if (v == *ro_.background)
+                continue;
+            EXPECT_EQ(v, Vec3f(0, 0, 0)) << px << "," << py;
+            ++black;
+        }
+    EXPECT_GT(black, 200);
+    EXPECT_EQ(img.hits, uint64_t(black));
+}
+
 TEST_F(RenderTest, SkyBehindAndSupersampling) {
     ro_.background.reset();
     ro_.samples = 2;
