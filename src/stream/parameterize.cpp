@@ -343,7 +343,9 @@ bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
              std::span<const uint32_t> boundary, const ParamOptions& options,
              std::vector<Vec2d>* uv, ChartParam* out) {
     const uint32_t vertex_count = uint32_t(chart.vertex_count());
-    const auto [pin0, pin1] = FarPair(chart, boundary);
+    // Plain locals, not a structured binding: lambdas below capture them (clang 14).
+    const auto pins = FarPair(chart, boundary);
+    const uint32_t pin0 = pins.first, pin1 = pins.second;
     if (pin0 == pin1) {
         out->status = ParamStatus::kDegenerate;
         out->message = "all boundary vertices coincide";

@@ -4,13 +4,13 @@
 #include "core/parallel.h"
 #include "stream/repair.h"
 
+#include "scan_mesh.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <ctime>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <string>
 
 namespace mebake::stream {
@@ -353,48 +353,7 @@ TEST(Segment, EmptyMesh) {
 
 // Real data ------------------------------------------------------------------------------
 
-// Test-only reader for the Stanford bunny's ASCII PLY files (x y z first on each vertex
-// line, faces as "3 a b c"); mebake's own reader lives in io/.
-std::optional<TriMesh> LoadAsciiPly(const std::string& path) {
-    std::ifstream in(path);
-    if (!in)
-        return std::nullopt;
-    std::string line;
-    size_t nv = 0, nf = 0;
-    while (std::getline(in, line)) {
-        std::istringstream ls(line);
-        std::string a, b;
-        ls >> a >> b;
-        if (a == "element" && b == "vertex")
-            ls >> nv;
-        if (a == "element" && b == "face")
-            ls >> nf;
-        if (a == "end_header")
-            break;
-    }
-    TriMesh m;
-    for (size_t v = 0; v < nv && std::getline(in, line); ++v) {
-        std::istringstream ls(line);
-        Vec3f p;
-        ls >> p.x >> p.y >> p.z;
-        m.position.push_back(p);
-        m.vertex_id.push_back(v);
-    }
-    for (size_t f = 0; f < nf && std::getline(in, line); ++f) {
-        std::istringstream ls(line);
-        int n = 0;
-        Tri t{};
-        ls >> n >> t[0] >> t[1] >> t[2];
-        if (n != 3)
-            return std::nullopt;
-        m.triangles.push_back(t);
-        m.face_id.push_back(f);
-        m.material.push_back(0);
-    }
-    if (m.vertex_count() != nv || m.triangle_count() != nf)
-        return std::nullopt;
-    return m;
-}
+using testing::LoadScan;
 
 std::string Scan(const char* name) {
     return std::string(MEBAKE_SHARED_DATA) + "/scans/" + name;
@@ -405,7 +364,7 @@ double Ms(std::clock_t t0) {
 }
 
 TEST(SegmentData, BunnyChartsAreDiscs) {
-    auto loaded = LoadAsciiPly(Scan("bun_zipper.ply"));
+    auto loaded = LoadScan(Scan("bun_zipper.ply"));
     if (!loaded)
         GTEST_SKIP() << "no " << Scan("bun_zipper.ply");
     TriMesh m = *loaded;
@@ -446,7 +405,7 @@ TEST(SegmentData, BunnyChartsAreDiscs) {
 }
 
 TEST(SegmentData, LowResolutionBunnyAfterRepair) {
-    auto loaded = LoadAsciiPly(Scan("bun_zipper_res2.ply"));
+    auto loaded = LoadScan(Scan("bun_zipper_res2.ply"));
     if (!loaded)
         GTEST_SKIP() << "no " << Scan("bun_zipper_res2.ply");
     TriMesh m = *loaded;
