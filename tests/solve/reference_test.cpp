@@ -64,9 +64,14 @@ ReferenceOptions Fast(double target) {
     return o;
 }
 
-void ExpectWithin3Se(double value, double se, double expected, const char* what, int i) {
+// Each test makes tens of comparisons with the estimator's own standard error: at 3 se a
+// correct estimator fails one run in a few dozen (seen with clang's floating point); at 4 se
+// one in ~10^4, while a bias of a few percent still fails.
+constexpr double kSe = 4;
+
+void ExpectWithinSe(double value, double se, double expected, const char* what, int i) {
     EXPECT_GT(se, 0) << what << " point " << i;
-    EXPECT_NEAR(value, expected, 3 * se) << what << " point " << i << " (se " << se << ")";
+    EXPECT_NEAR(value, expected, kSe * se) << what << " point " << i << " (se " << se << ")";
 }
 
 TEST(ReferenceTest, SquareLightOverPlaneMatchesLambert) {
@@ -93,10 +98,10 @@ TEST(ReferenceTest, SquareLightOverPlaneMatchesLambert) {
         const double irr = IrradianceClipped(light.vertices, 1.0, where[i], Vec3d(0, 0, 1));
         const Vec3d e = VectorIrradiance(light.vertices, 1.0, where[i]);
         for (int c = 0; c < 3; ++c) {
-            ExpectWithin3Se(p.b[c], p.b_se[c], 0.5 * light.radiance[c] * irr, "B", i);
+            ExpectWithinSe(p.b[c], p.b_se[c], 0.5 * light.radiance[c] * irr, "B", i);
             for (int k = 0; k < 3; ++k)
                 EXPECT_NEAR(p.e[size_t(c)][k], light.radiance[c] * e[k],
-                            3 * p.e_se[size_t(c)][k] + 1e-12)
+                            kSe * p.e_se[size_t(c)][k] + 1e-12)
                     << "E point " << i << " colour " << c << " axis " << k;
         }
     }
@@ -114,8 +119,8 @@ TEST(ReferenceTest, UniformSkyOverPlane) {
     for (int i = 0; i < 3; ++i)
         for (int c = 0; c < 3; ++c) {
             const auto& p = points[size_t(i)];
-            ExpectWithin3Se(p.b[c], p.b_se[c], 0.6 * kPi * scene.sky.radiance[c], "B", i);
-            EXPECT_NEAR(p.e[size_t(c)].z, kPi * scene.sky.radiance[c], 3 * p.e_se[size_t(c)].z);
+            ExpectWithinSe(p.b[c], p.b_se[c], 0.6 * kPi * scene.sky.radiance[c], "B", i);
+            EXPECT_NEAR(p.e[size_t(c)].z, kPi * scene.sky.radiance[c], kSe * p.e_se[size_t(c)].z);
         }
 }
 
@@ -150,11 +155,11 @@ TEST(ReferenceTest, FurnaceMatchesGeometricSeries) {
         const auto& p = points[size_t(i)];
         for (int c = 0; c < 3; ++c) {
             const double b = kPi * le[c] / (1 - rho);
-            ExpectWithin3Se(p.b[c], p.b_se[c], b, "B", i);
+            ExpectWithinSe(p.b[c], p.b_se[c], b, "B", i);
             // E = integral of L w over the hemisphere = pi L n with L = B / pi.
             const Vec3d e = p.geometric_normal * b;
             for (int k = 0; k < 3; ++k)
-                EXPECT_NEAR(p.e[size_t(c)][k], e[k], 3 * p.e_se[size_t(c)][k] + 1e-9);
+                EXPECT_NEAR(p.e[size_t(c)][k], e[k], kSe * p.e_se[size_t(c)][k] + 1e-9);
         }
     }
 }
@@ -217,7 +222,7 @@ TEST(ReferenceTest, BakeDirectoryReferenceAndProbe) {
     for (const auto& p : points) {
         for (int c = 0; c < 3; ++c) {
             const SkyModel sky = SkyModel::Uniform(view.scene.sky.radiance[c], view.scene.sky.up);
-            ExpectWithin3Se(p.b[c], p.b_se[c], 0.5 * SkyIrradiance(sky, Vec3d(0, 0, 1)), "B", 0);
+            ExpectWithinSe(p.b[c], p.b_se[c], 0.5 * SkyIrradiance(sky, Vec3d(0, 0, 1)), "B", 0);
         }
         sites.push_back({p.chart, p.local_triangle, p.barycentric});
     }
