@@ -1,0 +1,70 @@
+// The visibility proxy under a triangle budget, by vertex clustering on one global grid
+// (Rossignac & Borrel 1993, "Multi-resolution 3D approximations for rendering complex
+// scenes"): every input vertex falls into a cubic cell, the cell's representative is the
+// mean of its vertices, and an input triangle survives only if its three vertices lie in
+// three different cells. The surface arrives in parts (ingest's bricks) that are read
+// one at a time, twice per round, so memory follows the budget, not the input:
+//   round pass A  per part: sum the vertices per cell, in integer fixed point, so the
+//                 sum (hence the representative) does not depend on the order of the
+//                 parts or the vertices; a vertex shared by two parts (a brick border)
+//                 lands in the same cell with the same representative: no cracks
+//   round pass B  per part: map triangles to cells, keep those with three different
+//                 cells; duplicates (same three cells) are dropped at the end
+// The first cell size follows from the surface area and the budget; a round that ends
+// over the budget is redone with a larger cell.
+//
+// Deviation: the largest distance of an input vertex from its cell's representative.
+// Every proxy triangle is the image of an input triangle under the vertex -> representative
+// map, so every proxy point lies within this distance of the input surface (what the
+// solver's ray offset needs), and every input vertex lies within it of the proxy when its
+// cell is a corner of some proxy triangle (uncovered_vertices counts those whose cell is
+// not: pieces smaller than a cell that collapsed entirely).
+#pragma once
+
+#include "core/vec.h"
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace mebake::stream {
+
+// The solver's Embree scene may take 1/16 of the memory budget; Embree costs ~56 bytes
+// per triangle (measured: 55.4 MB for a 1M-triangle mesh, 219 MB for 4M). At the default
+// 1 GiB budget: 1.2M triangles.
+inline constexpr uint64_t kVisibilityShare = 16;
+inline constexpr uint64_t kEmbreeBytesPerTriangle = 56;
+inline uint64_t ProxyTriangleBudget(uint64_t memory_budget) {
+    return memory_budget / kVisibilityShare / kEmbreeBytesPerTriangle;
+}
+
+struct ProxyMesh {
+    std::vector<Vec3f> positions;
+    std::vector<uint32_t> triangles;  // 3 indices per triangle
+};
+
+// Returns part k (0 <= k < parts) of the input surface. Called several times per part.
+using ProxyPartSource = std::function<ProxyMesh(uint32_t part)>;
+
+struct ClusterOptions {
+    uint64_t max_triangles = 0;    // the budget (at least 1)
+    double surface_area = 0;       // of the input; sets the first cell size
+    Vec3d bbox_min{}, bbox_max{};  // contains every input vertex
+};
+
+struct ClusterResult {
+    ProxyMesh mesh;        // vertices in cell order, triangles sorted
+    double cell_size = 0;  // edge of the grid's cubes
+    double deviation = 0;  // see the top of this file
+    uint64_t input_triangles = 0;
+    uint64_t uncovered_vertices = 0;
+    int rounds = 0;
+};
+
+// Deterministic: the result does not depend on the thread count or on the order of the
+// parts (a vertex copied into two parts counts twice in its cell's mean, as in both
+// bricks it borders). Throws what `source` throws.
+ClusterResult ClusterProxy(uint32_t parts, const ProxyPartSource& source,
+                           const ClusterOptions& opt);
+
+}  // namespace mebake::stream
