@@ -90,7 +90,8 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
                                {"area_distortion", c.area_distortion},
                                {"virtual_fraction", c.virtual_fraction},
                                {"bbox", {Vec(c.bbox_min), Vec(c.bbox_max)}}});
-    j["proxy"] = {{"triangles", m.proxy_triangles}, {"deviation", m.proxy_deviation},
+    j["proxy"] = {{"triangles", m.proxy_triangles},
+                  {"deviation", m.proxy_deviation},
                   {"cell_size", m.proxy_cell_size}};
     j["timings"] = json::object();
     for (const auto& [k, v] : m.timings)
