@@ -9,7 +9,10 @@
 //                 parts or the vertices; a vertex shared by two parts (a brick border)
 //                 lands in the same cell with the same representative: no cracks
 //   round pass B  per part: map triangles to cells, keep those with three different
-//                 cells; duplicates (same three cells) are dropped at the end
+//                 cells; of several on the same three cells one is kept, whatever their
+//                 orientation (a wall thinner than a cell becomes one sheet, not nothing:
+//                 cancelling opposite pairs would keep the mesh closed but let light
+//                 through thin walls)
 // The first cell size follows from the surface area and the budget; a round that ends
 // over the budget is redone with a larger cell.
 //
