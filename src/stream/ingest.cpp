@@ -63,17 +63,18 @@ std::string BrickProxyPath(const std::string& dir, uint32_t brick) {
 }
 
 // Pass 4: the full repaired mesh, one chunk per brick, when its Embree scene fits the
-// visibility share of the budget; else a vertex-clustered proxy under that many
-// triangles (proxy_cluster.h), one chunk.
+// visibility share of the budget; else a vertex-clustered proxy that fits it
+// (proxy_cluster.h), one chunk.
 void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_triangles, Manifest* m) {
     const uint32_t bricks = uint32_t(brick_triangles.size());
     uint64_t total = 0;
     for (uint64_t n : brick_triangles)
         total += n;
+    const uint64_t full_budget = FullMeshTriangleBudget(m->memory_budget);
     const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(m->memory_budget), 1);
     const double diag = Length(m->bbox_max - m->bbox_min);
     io::ChunkWriter w(ProxyPath(dir), io::Tag("PRXY"), 1);
-    if (total <= budget) {
+    if (total <= full_budget) {
         uint64_t tris = 0;
         for (uint32_t b = 0; b < bricks; ++b) {
             std::string part = BrickProxyPath(dir, b);
@@ -91,7 +92,7 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
         m->proxy_deviation = 0;
         m->proxy_cell_size = 0;
         spdlog::info("proxy: the full mesh, {} triangles (budget {})", FormatCount(double(tris)),
-                     FormatCount(double(budget)));
+                     FormatCount(double(full_budget)));
         return;
     }
     auto source = [&](uint32_t b) {

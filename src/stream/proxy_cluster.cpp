@@ -18,63 +18,66 @@ constexpr uint64_t kEmptyKey = ~uint64_t(0);
 // Fixed point of the cell sums: positions relative to the box, 2^30 steps over its
 // largest side, so 2^33 vertices fit in an int64 sum.
 constexpr double kFixedSteps = double(uint64_t(1) << 30);
-// Expected proxy triangles per (area / cell^2): a surface crosses ~1.5 cells per cell^2 of
-// area over random orientations, and a clustered mesh has ~2 triangles per vertex. Only
-// the first round's guess; the measured count decides.
-constexpr double kTrianglesPerCellArea = 3.0;
+// Proxy triangles per (area / cell^2), measured: 2.45-2.7 on the scans, the mkscan sphere
+// and an icosphere (1.9 on an axis-aligned plane). Set a little high so the first round
+// lands ~10 % under the budget rather than over it (which costs a second round).
+constexpr double kTrianglesPerCellArea = 2.7;
 constexpr int kMaxRounds = 64;  // a guard against a bug, never reached
 
 struct Cell {
     uint64_t key = kEmptyKey;
     int64_t sum[3] = {0, 0, 0};
     uint32_t count = 0;
-    uint32_t index = 0;  // rank of the key among the occupied cells, after pass A
+};
+struct CellIndex {
+    uint64_t key = kEmptyKey;
+    uint32_t index = 0;  // rank of the key among the occupied cells
 };
 
-// Open addressing, linear probing. Which slot a cell takes depends on the insertion order,
-// but nothing read out of the table does: cells are ranked by key.
-class CellTable {
+// Open addressing, linear probing, sized to the expected cells rather than the next power
+// of two (the slot is the high half of hash x capacity): this table is pass 4's largest
+// allocation. Which slot a cell takes depends on the insertion order, but nothing read
+// out of the table does: cells are ranked by key.
+template <typename Slot>
+class HashSlots {
 public:
-    explicit CellTable(size_t expected) {
-        size_t cap = 1024;
-        while (3 * cap < 4 * expected)
-            cap *= 2;
-        slots_.resize(cap);
-    }
+    explicit HashSlots(size_t expected) : slots_(std::max<size_t>(1024, expected + expected / 4)) {}
     size_t size() const { return size_; }
-    Cell& Insert(uint64_t key) {
-        if (4 * (size_ + 1) > 3 * slots_.size())  // at most 3/4 full
+    Slot& Insert(uint64_t key) {
+        if (5 * (size_ + 1) > 4 * slots_.size())  // at most 4/5 full
             Grow();
-        Cell& c = slots_[Probe(slots_, key)];
+        Slot& c = slots_[Probe(slots_, key)];
         if (c.key == kEmptyKey) {
             c.key = key;
             ++size_;
         }
         return c;
     }
-    const Cell& Find(uint64_t key) const {
-        const Cell& c = slots_[Probe(slots_, key)];
+    const Slot& Find(uint64_t key) const {
+        const Slot& c = slots_[Probe(slots_, key)];
         DCHECK(c.key == key);
         return c;
     }
-    std::vector<Cell>& slots() { return slots_; }
+    const std::vector<Slot>& slots() const { return slots_; }
+    void Release() { std::vector<Slot>().swap(slots_); }
 
 private:
-    static size_t Probe(const std::vector<Cell>& slots, uint64_t key) {
-        const size_t mask = slots.size() - 1;
-        size_t i = size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+    static size_t Probe(const std::vector<Slot>& slots, uint64_t key) {
+        const uint64_t h = key * 0x9E3779B97F4A7C15ull;
+        size_t i = size_t((static_cast<unsigned __int128>(h) * slots.size()) >> 64);
         while (slots[i].key != kEmptyKey && slots[i].key != key)
-            i = (i + 1) & mask;
+            if (++i == slots.size())
+                i = 0;
         return i;
     }
     void Grow() {
-        std::vector<Cell> bigger(slots_.size() * 2);
-        for (const Cell& c : slots_)
+        std::vector<Slot> bigger(slots_.size() + slots_.size() / 2);
+        for (const Slot& c : slots_)
             if (c.key != kEmptyKey)
                 bigger[Probe(bigger, c.key)] = c;
         slots_.swap(bigger);
     }
-    std::vector<Cell> slots_;
+    std::vector<Slot> slots_;
     size_t size_ = 0;
 };
 
@@ -125,20 +128,18 @@ std::array<uint32_t, 3> Canonical(uint32_t a, uint32_t b, uint32_t c) {
         return {c, a, b};
     return {a, b, c};
 }
-std::array<uint32_t, 3> Sorted(const std::array<uint32_t, 3>& t) {
-    std::array<uint32_t, 3> s = t;
-    std::sort(s.begin(), s.end());
-    return s;
-}
 // Same three cells = a duplicate, whatever the orientation; the first in this order stays.
+// Canonical triangles start with their smallest index, so (t0, min, max) is the sorted
+// triple.
 void SortUnique(std::vector<std::array<uint32_t, 3>>& tris) {
-    auto less = [](const auto& a, const auto& b) {
-        auto sa = Sorted(a), sb = Sorted(b);
-        return sa != sb ? sa < sb : a < b;
+    auto key = [](const std::array<uint32_t, 3>& t) {
+        return std::array<uint32_t, 4>{t[0], std::min(t[1], t[2]), std::max(t[1], t[2]), t[1]};
     };
-    std::sort(tris.begin(), tris.end(), less);
+    std::sort(tris.begin(), tris.end(),
+              [&](const auto& a, const auto& b) { return key(a) < key(b); });
     auto same = [](const auto& a, const auto& b) {
-        return Sorted(a) == Sorted(b);
+        return a[0] == b[0] && std::min(a[1], a[2]) == std::min(b[1], b[2]) &&
+               std::max(a[1], a[2]) == std::max(b[1], b[2]);
     };
     tris.erase(std::unique(tris.begin(), tris.end(), same), tris.end());
 }
@@ -158,7 +159,8 @@ Round RunRound(uint32_t parts, const ProxyPartSource& source, const Grid& grid, 
     // guess far too fine stops early instead of holding a table sized by the input.
     const size_t cell_cap = size_t(budget + 1024);
     const size_t triangle_cap = size_t(4 * budget + 1024);
-    CellTable table(std::min<size_t>(cell_cap, budget / 2 + 1024));
+    // A round on target has about budget / 2 cells (two triangles per vertex).
+    HashSlots<Cell> table(size_t(budget / 2 + 1024));
 
     // Pass A: integer sums per cell.
     for (uint32_t k = 0; k < parts; ++k) {
@@ -178,23 +180,27 @@ Round RunRound(uint32_t parts, const ProxyPartSource& source, const Grid& grid, 
             return r;
         }
     }
-    std::vector<Cell*> cells;
+    // Cells in key order; the sums table gives way to a smaller key -> rank table.
+    std::vector<const Cell*> cells;
     cells.reserve(table.size());
-    for (Cell& c : table.slots())
+    for (const Cell& c : table.slots())
         if (c.key != kEmptyKey)
             cells.push_back(&c);
     std::sort(cells.begin(), cells.end(),
               [](const Cell* a, const Cell* b) { return a->key < b->key; });
     r.representative.resize(cells.size());
     r.cell_count.resize(cells.size());
+    HashSlots<CellIndex> rank(cells.size());
     for (size_t i = 0; i < cells.size(); ++i) {
-        Cell& c = *cells[i];
-        c.index = uint32_t(i);
+        const Cell& c = *cells[i];
+        rank.Insert(c.key).index = uint32_t(i);
         r.cell_count[i] = c.count;
         for (int a = 0; a < 3; ++a)
             r.representative[i][a] =
                 float(grid.origin[a] + double(c.sum[a]) / double(c.count) / grid.fixed_scale);
     }
+    std::vector<const Cell*>().swap(cells);
+    table.Release();
 
     // Pass B: triangles between three different cells.
     for (uint32_t k = 0; k < parts; ++k) {
@@ -205,7 +211,7 @@ Round RunRound(uint32_t parts, const ProxyPartSource& source, const Grid& grid, 
         for (size_t v = 0; v < keys.size(); ++v) {
             if (!used[v])
                 continue;
-            cell_of[v] = table.Find(keys[v]).index;
+            cell_of[v] = rank.Find(keys[v]).index;
             const Vec3f d = part.positions[v] - r.representative[cell_of[v]];
             r.deviation = std::max(r.deviation, Length(Vec3d(d)));
         }

@@ -32,13 +32,19 @@
 
 namespace mebake::stream {
 
-// The solver's Embree scene may take 1/16 of the memory budget; Embree costs ~56 bytes
-// per triangle (measured: 55.4 MB for a 1M-triangle mesh, 219 MB for 4M). At the default
-// 1 GiB budget: 1.2M triangles.
+// The solver's Embree scene may take 1/16 of the memory budget. Embree's cost per
+// triangle, measured (solve --stats embree_bytes, mkscan spheres): the full mesh 55 B
+// (55.4 MB for 1M, 219 MB for 4M), a clustered proxy 88 B (86.9 MB for 986K: its sliver
+// triangles get split in the BVH build). At the default 1 GiB: the full mesh up to 1.2M
+// triangles, else a proxy of at most 760K.
 inline constexpr uint64_t kVisibilityShare = 16;
 inline constexpr uint64_t kEmbreeBytesPerTriangle = 56;
-inline uint64_t ProxyTriangleBudget(uint64_t memory_budget) {
+inline constexpr uint64_t kEmbreeBytesPerProxyTriangle = 88;
+inline uint64_t FullMeshTriangleBudget(uint64_t memory_budget) {
     return memory_budget / kVisibilityShare / kEmbreeBytesPerTriangle;
+}
+inline uint64_t ProxyTriangleBudget(uint64_t memory_budget) {
+    return memory_budget / kVisibilityShare / kEmbreeBytesPerProxyTriangle;
 }
 
 struct ProxyMesh {

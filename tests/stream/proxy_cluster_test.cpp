@@ -171,6 +171,24 @@ size_t LeakingRays(const ProxyMesh& m, int rays) {
     return leaks;
 }
 
+TEST(ProxyCluster, AWrongAreaGuessCostsRoundsNotTheBudget) {
+    const std::vector<ProxyMesh> parts = Split(Icosphere(6), 4);
+    for (double area : {0.05, 4.0, 400.0}) {  // the true area is 12.6
+        ClusterOptions o;
+        o.max_triangles = 3000;
+        o.surface_area = area;
+        o.bbox_min = {-1, -1, -1};
+        o.bbox_max = {1, 1, 1};
+        ClusterResult r = ClusterProxy(
+            4, [&](uint32_t k) { return parts[k]; }, o);
+        EXPECT_LE(r.mesh.triangles.size() / 3, 3000u) << "area " << area;
+        EXPECT_GT(r.mesh.triangles.size() / 3, 0u) << "area " << area;
+        if (area < 1) {
+            EXPECT_GT(r.rounds, 1) << "a far too fine first cell must be redone";
+        }
+    }
+}
+
 TEST(ProxyCluster, SplittingIntoPartsLeavesNoCracks) {
     const ProxyMesh sphere = Icosphere(6);
     const ClusterResult whole = Cluster(Split(sphere, 1), 5000);
@@ -285,7 +303,7 @@ TEST(ProxyIngest, SmallBudgetSimplifiesCrackFreeAndDeterministic) {
     const std::string obj = WriteObj(Icosphere(6), "mebake_proxy_sphere.obj");
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_a").string();
     const std::string b = (fs::temp_directory_path() / "mebake_proxy_b").string();
-    const uint64_t memory = uint64_t(16) << 20;  // budget 18724 triangles, 5 bricks
+    const uint64_t memory = uint64_t(16) << 20;  // full 18724 triangles, proxy 11915; 8 bricks
     const uint64_t budget = ProxyTriangleBudget(memory);
     const Manifest ma = IngestSphere(obj, a, 2, memory);
     IngestSphere(obj, b, 1, memory);
@@ -323,7 +341,7 @@ TEST(ProxyIngest, FullMeshWhenItFits) {
     const ProxyMesh sphere = Icosphere(5);
     const std::string obj = WriteObj(sphere, "mebake_proxy_sphere5.obj");
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_full").string();
-    const Manifest m = IngestSphere(obj, a, 2, uint64_t(64) << 20);  // budget 74898
+    const Manifest m = IngestSphere(obj, a, 2, uint64_t(64) << 20);  // full mesh budget 74898
     EXPECT_EQ(m.proxy_triangles, 20480u);
     EXPECT_EQ(m.proxy_deviation, 0);
     EXPECT_EQ(m.proxy_cell_size, 0);
