@@ -32,14 +32,14 @@
 
 namespace mebake::stream {
 
-// The solver's Embree scene may take 1/16 of the memory budget. Embree's cost per
+// The solver's Embree scene may take 1/16 of the memory budget. Embree's peak cost per
 // triangle, measured (solve --stats embree_bytes, mkscan spheres): the full mesh 55 B
-// (55.4 MB for 1M, 219 MB for 4M), a clustered proxy 88 B (86.9 MB for 986K: its sliver
-// triangles get split in the BVH build). At the default 1 GiB: the full mesh up to 1.2M
-// triangles, else a proxy of at most 760K.
+// (55.4 MB for 1M, 219 MB for 4M), a clustered proxy 88-101 B (86.9 MB for 986K, 72.6 MB
+// for 721K; its triangles are less regular), so 100 B. At the default 1 GiB: the full
+// mesh up to 1.2M triangles, else a proxy of at most 670K.
 inline constexpr uint64_t kVisibilityShare = 16;
 inline constexpr uint64_t kEmbreeBytesPerTriangle = 56;
-inline constexpr uint64_t kEmbreeBytesPerProxyTriangle = 88;
+inline constexpr uint64_t kEmbreeBytesPerProxyTriangle = 100;
 inline uint64_t FullMeshTriangleBudget(uint64_t memory_budget) {
     return memory_budget / kVisibilityShare / kEmbreeBytesPerTriangle;
 }

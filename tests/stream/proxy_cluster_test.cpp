@@ -303,7 +303,7 @@ TEST(ProxyIngest, SmallBudgetSimplifiesCrackFreeAndDeterministic) {
     const std::string obj = WriteObj(Icosphere(6), "mebake_proxy_sphere.obj");
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_a").string();
     const std::string b = (fs::temp_directory_path() / "mebake_proxy_b").string();
-    const uint64_t memory = uint64_t(16) << 20;  // full 18724 triangles, proxy 11915; 8 bricks
+    const uint64_t memory = uint64_t(16) << 20;  // full 18724 triangles, proxy 10485; 8 bricks
     const uint64_t budget = ProxyTriangleBudget(memory);
     const Manifest ma = IngestSphere(obj, a, 2, memory);
     IngestSphere(obj, b, 1, memory);
