@@ -144,6 +144,38 @@ void SortUnique(std::vector<std::array<uint32_t, 3>>& tris) {
     tris.erase(std::unique(tris.begin(), tris.end(), same), tris.end());
 }
 
+// Hands out the parts in order, reading part k + 1 on another thread while part k is
+// processed (reading and decompressing is most of pass 4's time). Two parts in memory.
+class PartReader {
+public:
+    PartReader(uint32_t parts, const ProxyPartSource& source) : parts_(parts), source_(source) {
+        if (parts_ > 0)
+            Start(0);
+    }
+    ~PartReader() {
+        try {
+            group_.Wait();
+        } catch (...) {  // already unwinding from another error
+        }
+    }
+    ProxyMesh Next() {
+        group_.Wait();  // rethrows the read's error
+        ProxyMesh part = std::move(next_);
+        if (++k_ < parts_)
+            Start(k_);
+        return part;
+    }
+
+private:
+    void Start(uint32_t k) {
+        group_.Run([this, k] { next_ = source_(k); });
+    }
+    uint32_t parts_, k_ = 0;
+    const ProxyPartSource& source_;
+    ProxyMesh next_;
+    TaskGroup group_;
+};
+
 struct Round {
     bool aborted = false;               // too many cells or triangles for this cell size
     std::vector<Vec3f> representative;  // per cell, in key order
@@ -163,8 +195,9 @@ Round RunRound(uint32_t parts, const ProxyPartSource& source, const Grid& grid, 
     HashSlots<Cell> table(size_t(budget / 2 + 1024));
 
     // Pass A: integer sums per cell.
+    PartReader reader_a(parts, source);
     for (uint32_t k = 0; k < parts; ++k) {
-        ProxyMesh part = source(k);
+        ProxyMesh part = reader_a.Next();
         const std::vector<uint8_t> used = UsedVertices(part);
         const std::vector<uint64_t> keys = Keys(grid, part);
         for (size_t v = 0; v < keys.size(); ++v) {
@@ -203,8 +236,9 @@ Round RunRound(uint32_t parts, const ProxyPartSource& source, const Grid& grid, 
     table.Release();
 
     // Pass B: triangles between three different cells.
+    PartReader reader_b(parts, source);
     for (uint32_t k = 0; k < parts; ++k) {
-        ProxyMesh part = source(k);
+        ProxyMesh part = reader_b.Next();
         const std::vector<uint8_t> used = UsedVertices(part);
         const std::vector<uint64_t> keys = Keys(grid, part);
         std::vector<uint32_t> cell_of(keys.size(), 0);
