@@ -3,7 +3,8 @@
 // scenes"): every input vertex falls into a cubic cell, the cell's representative is the
 // mean of its vertices, and an input triangle survives only if its three vertices lie in
 // three different cells. The surface arrives in parts (ingest's bricks) that are read
-// one at a time, twice per round, so memory follows the budget, not the input:
+// one at a time (the next one read meanwhile), twice per round, so memory follows the
+// budget, not the input:
 //   round pass A  per part: sum the vertices per cell, in integer fixed point, so the
 //                 sum (hence the representative) does not depend on the order of the
 //                 parts or the vertices; a vertex shared by two parts (a brick border)
