@@ -90,7 +90,9 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
                                {"area_distortion", c.area_distortion},
                                {"virtual_fraction", c.virtual_fraction},
                                {"bbox", {Vec(c.bbox_min), Vec(c.bbox_max)}}});
-    j["proxy"] = {{"triangles", m.proxy_triangles}, {"deviation", m.proxy_deviation}};
+    j["proxy"] = {{"triangles", m.proxy_triangles},
+                  {"deviation", m.proxy_deviation},
+                  {"cell_size", m.proxy_cell_size}};
     j["timings"] = json::object();
     for (const auto& [k, v] : m.timings)
         j["timings"][k] = v;
@@ -164,6 +166,7 @@ Manifest ReadManifest(const std::string& dir) {
         }
         m.proxy_triangles = j.at("proxy").at("triangles");
         m.proxy_deviation = j.at("proxy").at("deviation");
+        m.proxy_cell_size = j.at("proxy").value("cell_size", 0.0);
         for (const auto& [k, v] : j.at("timings").items())
             m.timings.emplace_back(k, v.get<double>());
     } catch (const json::exception& e) {

@@ -72,7 +72,10 @@ struct Manifest {
     uint32_t brick_count = 0;
     std::vector<ChartRecord> charts;
     uint64_t proxy_triangles = 0;
-    double proxy_deviation = 0;  // max distance of the proxy from the input surface
+    // Largest distance of a proxy point from the input surface (0: the full mesh) and the
+    // clustering cell (0: the full mesh); proxy_cluster.h.
+    double proxy_deviation = 0;
+    double proxy_cell_size = 0;
     // Timings of the passes, seconds.
     std::vector<std::pair<std::string, double>> timings;
 };

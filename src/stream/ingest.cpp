@@ -9,6 +9,7 @@
 #include "io/mesh_format.h"
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
+#include "stream/proxy_cluster.h"
 #include "stream/spill.h"
 
 #include <algorithm>
@@ -55,25 +56,76 @@ void PrepareDirectory(const IngestOptions& opt) {
     fs::create_directories(dir + "/bricks");
 }
 
-void WriteProxy(const std::string& dir, uint32_t bricks, Manifest* m) {
+std::string BrickProxyPath(const std::string& dir, uint32_t brick) {
+    char name[48];
+    std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", brick);
+    return dir + name;
+}
+
+// Pass 4: the full repaired mesh, one chunk per brick, when its Embree scene fits the
+// visibility share of the budget; else a vertex-clustered proxy that fits it
+// (proxy_cluster.h), one chunk.
+void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_triangles, Manifest* m) {
+    const uint32_t bricks = uint32_t(brick_triangles.size());
+    uint64_t total = 0;
+    for (uint64_t n : brick_triangles)
+        total += n;
+    const uint64_t full_budget = FullMeshTriangleBudget(m->memory_budget);
+    const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(m->memory_budget), 1);
+    const double diag = Length(m->bbox_max - m->bbox_min);
     io::ChunkWriter w(ProxyPath(dir), io::Tag("PRXY"), 1);
-    uint64_t tris = 0;
-    for (uint32_t b = 0; b < bricks; ++b) {
-        char name[48];
-        std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
-        std::string part = dir + name;
-        if (!fs::exists(part))
-            continue;
-        io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
-        auto pos = r.Read(io::Tag("PPOS"));
-        auto tri = r.Read(io::Tag("PTRI"));
-        tris += tri.size() / 12;
-        w.Add(io::Tag("PPOS"), b, pos);
-        w.Add(io::Tag("PTRI"), b, tri);
+    if (total <= full_budget) {
+        uint64_t tris = 0;
+        for (uint32_t b = 0; b < bricks; ++b) {
+            std::string part = BrickProxyPath(dir, b);
+            if (!fs::exists(part))
+                continue;
+            io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
+            auto pos = r.Read(io::Tag("PPOS"));
+            auto tri = r.Read(io::Tag("PTRI"));
+            tris += tri.size() / 12;
+            w.Add(io::Tag("PPOS"), b, pos);
+            w.Add(io::Tag("PTRI"), b, tri);
+        }
+        w.Finish();
+        m->proxy_triangles = tris;
+        m->proxy_deviation = 0;
+        m->proxy_cell_size = 0;
+        spdlog::info("proxy: the full mesh, {} triangles (budget {})", FormatCount(double(tris)),
+                     FormatCount(double(full_budget)));
+        return;
     }
+    auto source = [&](uint32_t b) {
+        ProxyMesh part;
+        std::string path = BrickProxyPath(dir, b);
+        if (!fs::exists(path))
+            return part;
+        io::ChunkReader r(path, io::Tag("PRXP"), 1, 1);
+        part.positions = r.ReadArray<Vec3f>(io::Tag("PPOS"));
+        part.triangles = r.ReadArray<uint32_t>(io::Tag("PTRI"));
+        return part;
+    };
+    ClusterOptions co;
+    co.max_triangles = budget;
+    co.surface_area = m->surface_area;
+    co.bbox_min = m->bbox_min;
+    co.bbox_max = m->bbox_max;
+    ClusterResult cr = ClusterProxy(bricks, source, co);
+    w.AddArray(io::Tag("PPOS"), 0, cr.mesh.positions);
+    w.AddArray(io::Tag("PTRI"), 0, cr.mesh.triangles);
     w.Finish();
-    m->proxy_triangles = tris;
-    m->proxy_deviation = 0;  // the full repaired mesh
+    m->proxy_triangles = cr.mesh.triangles.size() / 3;
+    m->proxy_deviation = cr.deviation;
+    m->proxy_cell_size = cr.cell_size;
+    spdlog::info(
+        "proxy: {} -> {} triangles (budget {}), cell {:.3g}, deviation {:.3g} = {:.3f}% of the "
+        "diagonal, {} round(s){}",
+        FormatCount(double(cr.input_triangles)), FormatCount(double(m->proxy_triangles)),
+        FormatCount(double(budget)), cr.cell_size, cr.deviation,
+        diag > 0 ? 100 * cr.deviation / diag : 0.0, cr.rounds,
+        cr.uncovered_vertices
+            ? fmt::format(", {} vertices in collapsed pieces", cr.uncovered_vertices)
+            : std::string());
 }
 
 }  // namespace
@@ -161,6 +213,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // file are enough, and a fixed size keeps peak memory independent of the mesh.
     copt.cache_bytes = uint64_t(3) << 20;
     std::vector<BrickResult> results(plan.bricks.size());
+    std::vector<uint64_t> proxy_triangles(plan.bricks.size(), 0);
     std::atomic<uint32_t> done{0};
     const bool tty = StderrIsTerminal();
     // kBricksInFlight workers take bricks in turn; each brick writes only its own files
@@ -173,12 +226,11 @@ Manifest Ingest(const IngestOptions& opt) {
             try {
                 BrickResult r = BuildBrickCharts(dir, b, copt);
                 // The brick's visibility part goes to disk now, so memory does not accumulate.
-                char name[48];
-                std::snprintf(name, sizeof(name), "/bricks/b%05u.proxy", b);
-                io::ChunkWriter w(dir + name, io::Tag("PRXP"), 1);
+                io::ChunkWriter w(BrickProxyPath(dir, b), io::Tag("PRXP"), 1);
                 w.AddArray(io::Tag("PPOS"), 0, r.proxy_positions);
                 w.AddArray(io::Tag("PTRI"), 0, r.proxy_triangles);
                 w.Finish();
+                proxy_triangles[b] = r.proxy_triangles.size() / 3;
                 std::vector<Vec3f>().swap(r.proxy_positions);
                 std::vector<uint32_t>().swap(r.proxy_triangles);
                 results[b] = std::move(r);
@@ -216,7 +268,7 @@ Manifest Ingest(const IngestOptions& opt) {
 
     // Pass 4: the visibility mesh.
     auto t3 = Clock::now();
-    WriteProxy(dir, m.brick_count, &m);
+    WriteProxy(dir, proxy_triangles, &m);
     m.timings.emplace_back("proxy", Since(t3));
 
     // The spill's face list and brick files are not needed any more.

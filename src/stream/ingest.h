@@ -4,7 +4,8 @@
 //   pass 2 bricks    faces binned by Morton order into bricks that fit the budget (bricks.h)
 //   pass 3 charts    per brick in parallel: repair, charts, parameterization, tiles
 //                    (chart_builder.h)
-//   pass 4 proxy     the visibility mesh, one chunk per brick (proxy.bin)
+//   pass 4 proxy     the visibility mesh (proxy.bin): the full mesh, one chunk per brick,
+//                    or over 1/16 of the budget a clustered proxy (proxy_cluster.h)
 #pragma once
 
 #include <functional>
