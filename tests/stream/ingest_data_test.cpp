@@ -11,6 +11,7 @@
 #include "stream/tile.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -31,7 +32,10 @@ std::string Scan(const char* name) {
 }
 
 std::string TempDir(const std::string& name) {
-    return (fs::temp_directory_path() / ("mebake_ingest_data_" + name)).string();
+    // Per process: two checkouts' test runs on one machine must not share directories.
+    return (fs::temp_directory_path() /
+            ("mebake_ingest_data_" + std::to_string(::getpid()) + "_" + name))
+        .string();
 }
 
 Manifest IngestScan(const std::string& input, const std::string& dir, int threads,
