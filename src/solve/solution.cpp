@@ -93,8 +93,7 @@ Solution ReadSolution(const std::string& path) {
         for (float x : coef)
             if (!std::isfinite(x))
                 CorruptError({path}, "chart {}: non-finite coefficient", c);
-        std::vector<float> unshot(coef.size(), 0.f);
-        f.Assign(std::move(nodes), std::move(coef), std::move(unshot));
+        f.Assign(std::move(nodes), std::move(coef), {});  // values only: nothing shoots
         s.fields.push_back(std::move(f));
     }
     return s;
