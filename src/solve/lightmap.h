@@ -4,8 +4,9 @@
 //
 // Every texel of a chart's square is shaded at its centre with the tile's full-resolution
 // normal and albedo (bake_view.h ChartShader::AtUv); gutter texels repeat the nearest
-// border texel; texels outside every chart are 0. Pages are computed shelf by shelf and
-// handed out in bands of rows, so memory holds one band and one shelf's tiles, not a page.
+// border texel; texels outside every chart are 0. Pages are computed shelf by shelf, a
+// group of charts (two per thread) at a time, and handed out in bands of rows, so memory
+// holds one shelf's rows and one group's tiles, not a page nor a whole shelf's tiles.
 //
 // Contents:
 //   Radiosity   channels R, G, B = B in W/m^2 (linear, >= 0) and A = 1 on chart blocks

@@ -153,8 +153,10 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     }
 
     // Charts' geometry pyramids, in a memory-mapped file whose resident part stays under
-    // an eighth of the memory budget (geometry_cache.h); tiles are read a batch at a time.
-    GeometryCache geometry(opt.dir + "/solve", opt.memory / 8);
+    // 1/32 of the memory budget beyond the pinned charts (geometry_cache.h): a pass over
+    // the charts faults evicted pyramids back from the page cache, which costs far less
+    // than the pyramids' memory. Tiles are read a batch at a time.
+    GeometryCache geometry(opt.dir + "/solve", opt.memory / 32);
     std::vector<SolveChart> charts(m.charts.size());
     {
         const size_t batch = size_t(std::max(1, 2 * MaxThreads()));
