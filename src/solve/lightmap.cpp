@@ -28,6 +28,7 @@ std::string Extension(const std::string& path) {
 // The tiles and shaders of a group of charts.
 struct ChartGroup {
     std::vector<stream::ChartTile> tiles;
+    std::vector<std::shared_ptr<const ChartField>> fields;
     std::vector<std::unique_ptr<ChartShader>> shaders;
 };
 
@@ -35,6 +36,7 @@ ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const 
     ChartGroup g;
     const size_t n = charts.size();
     g.tiles.resize(n);
+    g.fields.resize(n);
     g.shaders.resize(n);
     ParallelFor(0, int64_t(n), [&](int64_t k) {
         const uint32_t c = charts[size_t(k)];
@@ -44,8 +46,9 @@ ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const 
         if (tile.meta.resolution != atlas.charts[c].resolution)
             CorruptError({path}, "resolution {} but the manifest says {}", tile.meta.resolution,
                          atlas.charts[c].resolution);
+        g.fields[size_t(k)] = view.Field(c);
         g.shaders[size_t(k)] = std::make_unique<ChartShader>(
-            tile, view.solution.fields[c], view.solution.radiosity, view.scene, path);
+            tile, *g.fields[size_t(k)], view.solution.radiosity, view.scene, path);
     });
     return g;
 }
@@ -100,7 +103,7 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
 }
 
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows) {
+                 const PageSink& sink, uint32_t band_rows, size_t group) {
     CHECK_LT(page, atlas.pages.size());
     CHECK_GE(band_rows, 1u);
     const AtlasPage& pg = atlas.pages[page];
@@ -108,7 +111,8 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
     // A shelf's rows are computed into one buffer, a group of charts at a time, then
     // handed out in bands: memory holds one shelf's rows and one group's tiles, however
     // many charts a shelf has (an 8192-wide page holds 62 charts of 128 texels per shelf).
-    const size_t group = size_t(std::max(1, 2 * MaxThreads()));
+    if (group == 0)
+        group = size_t(std::max(1, 2 * MaxThreads()));
     std::vector<float> rows_buffer;
     uint32_t y = 0;
     auto emit = [&](uint32_t first, uint32_t count) {  // rows of rows_buffer

@@ -41,9 +41,10 @@ std::vector<std::string> MapChannelNames(MapContent content);
 using PageSink =
     std::function<void(std::span<const float> pixels, uint32_t first_row, uint32_t rows)>;
 
-// Computes one page and streams it to `sink` in bands of at most band_rows rows.
+// Computes one page and streams it to `sink` in bands of at most band_rows rows, holding
+// the tiles of `group` charts at a time (0: two per thread).
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows = 64);
+                 const PageSink& sink, uint32_t band_rows = 64, size_t group = 0);
 
 // Fills block rows [row_begin, row_end) of one chart's block (gutters included): `out`
 // points at texel (0, row_begin) of the block, rows `stride` floats apart, MapChannels
