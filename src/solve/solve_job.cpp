@@ -245,6 +245,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     // checkpoints never take more than ~3% of the solve (large fields on slow disks).
     double last_duration = 0;
     solver.SetBatchHook([&](int next_batch) {
+        LogMemory(fmt::format("batch {}", next_batch - 1).c_str());
         const bool stop = g_stop.load();
         const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
         const double interval = opt.checkpoint_interval > 0
