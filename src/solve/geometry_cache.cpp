@@ -1,12 +1,17 @@
 #include "solve/geometry_cache.h"
 
 #include "core/check.h"
+#include "core/error.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <unistd.h>
 #include <utility>
 
 namespace mebake::solve {
@@ -96,45 +101,81 @@ stream::SurfaceSample SampleBilinear(const GeometryPyramid& img, int level, floa
 
 GeometryCache::GeometryCache(const std::string& dir, uint64_t budget_bytes)
     : budget_(budget_bytes) {
-    const std::string path =
+    path_ =
         (std::filesystem::path(dir) / ("geometry." + std::to_string(::getpid()) + ".tmp")).string();
-    file_ = MappedFile::Create(path, 0);
-    std::filesystem::remove(path);  // the mapping keeps the file alive
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    if (fd_ < 0)
+        IoError({path_}, "cannot create: {}", ErrnoString(errno));
+    ::unlink(path_.c_str());  // the descriptor keeps the file alive
+}
+
+GeometryCache::~GeometryCache() {
+    if (data_)
+        ::munmap(data_, size_);
+    if (fd_ >= 0)
+        ::close(fd_);
 }
 
 uint32_t GeometryCache::Add(const stream::GeometryImage& image) {
     CHECK(!image.levels.empty());
+    CHECK(data_ == nullptr);  // no Add() after View()
     Entry e;
-    e.offset = (file_.size() + kAlign - 1) / kAlign * kAlign;
+    e.offset = (size_ + kAlign - 1) / kAlign * kAlign;
     e.bytes = PyramidBytes(image);
     e.resolution = image.resolution;
-    for (const auto& level : image.levels)
-        e.level_sizes.push_back(level.size());
-    file_.Resize(e.offset + e.bytes);
-    uint8_t* dst = file_.data() + e.offset;
+    uint64_t at = e.offset;
     for (const auto& level : image.levels) {
-        std::memcpy(dst, level.data(), level.size() * sizeof(stream::GeometryTexel));
-        dst += level.size() * sizeof(stream::GeometryTexel);
+        e.level_sizes.push_back(level.size());
+        const auto* p = reinterpret_cast<const uint8_t*>(level.data());
+        size_t left = level.size() * sizeof(stream::GeometryTexel);
+        while (left > 0) {
+            const ssize_t n = ::pwrite(fd_, p, left, off_t(at));
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n <= 0)
+                IoError({path_}, "cannot write {} bytes at {}: {}", left, at,
+                        n < 0 ? ErrnoString(errno) : std::string("no progress"));
+            p += n;
+            at += uint64_t(n);
+            left -= size_t(n);
+        }
     }
-    // Written pages stay in the page cache (dirty, then written back); not in this process.
-    file_.DontNeed(e.offset, (e.bytes + kAlign - 1) / kAlign * kAlign);
+    size_ = at;
     entries_.push_back(e);
     return uint32_t(entries_.size() - 1);
 }
 
 GeometryPyramid GeometryCache::View(uint32_t c) {
     CHECK_LT(c, entries_.size());
+    if (data_ == nullptr && size_ > 0) {
+        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_SHARED, fd_, 0);
+        if (p == MAP_FAILED)
+            IoError({path_}, "cannot map {} bytes: {}", size_, ErrnoString(errno));
+        data_ = static_cast<uint8_t*>(p);
+    }
     const Entry& e = entries_[c];
     GeometryPyramid p;
     p.resolution = e.resolution;
     p.cache_ = this;
     p.chart_ = c;
-    const auto* texels = reinterpret_cast<const stream::GeometryTexel*>(file_.data() + e.offset);
+    const auto* texels = reinterpret_cast<const stream::GeometryTexel*>(data_ + e.offset);
     for (size_t n : e.level_sizes) {
         p.levels.emplace_back(texels, n);
         texels += n;
     }
     return p;
+}
+
+void GeometryCache::DropPages(const Entry& e) {
+    if (data_ == nullptr)
+        return;
+    // Whole pages only: pyramids start on page boundaries, and the last one ends the file.
+    const uint64_t page = uint64_t(::sysconf(_SC_PAGESIZE));
+    const uint64_t begin = (e.offset + page - 1) / page * page;
+    const uint64_t end =
+        std::min((e.offset + e.bytes + page - 1) / page * page, (size_ + page - 1) / page * page);
+    if (end > begin)
+        ::madvise(data_ + begin, end - begin, MADV_DONTNEED);
 }
 
 GeometryPin GeometryCache::Pin(uint32_t c) {
@@ -167,7 +208,7 @@ void GeometryCache::TrimLocked() {
                 victim = &e;
         if (!victim)
             return;  // everything resident is pinned
-        file_.DontNeed(victim->offset, (victim->bytes + kAlign - 1) / kAlign * kAlign);
+        DropPages(*victim);
         victim->resident = false;
         stats_.resident_bytes -= victim->bytes;
         ++stats_.evictions;

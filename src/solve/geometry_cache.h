@@ -3,7 +3,8 @@
 // cache pins tiles with RAII handles and evicts under the budget").
 //
 // Every chart's pyramid (stream/geometry_image.h, 64 bytes per texel, all levels) is
-// copied once into an unlinked file under the bake directory. The solver reads it through
+// written once into an unlinked file under the bake directory, which is then mapped
+// read-only (clean page-cache pages: dropping them costs no write). The solver reads it through
 // GeometryPyramid views; a pass over a chart holds a GeometryPin. When a pin is released
 // and the pinned-or-recently-used pyramids exceed the budget, the least recently used
 // unpinned ones are dropped from this process (madvise MADV_DONTNEED on their pages; the
@@ -13,7 +14,6 @@
 // worked on (about one per thread), not the chart count.
 #pragma once
 
-#include "core/mmap_file.h"
 #include "stream/geometry_image.h"
 
 #include <cstdint>
@@ -75,19 +75,21 @@ stream::SurfaceSample SampleBilinear(const GeometryPyramid& img, int level, floa
 class GeometryCache {
 public:
     // An unlinked file in directory `dir` (nothing is left behind, even after a crash).
-    // budget_bytes: resident pyramids kept beyond the pinned ones.
+    // budget_bytes: resident pyramids kept beyond the pinned ones. Throws Error(Io).
     GeometryCache(const std::string& dir, uint64_t budget_bytes);
+    ~GeometryCache();
     GeometryCache(const GeometryCache&) = delete;
     GeometryCache& operator=(const GeometryCache&) = delete;
 
-    // Appends a chart's pyramid (charts are numbered in the order added); its pages are
-    // dropped from memory at once. Not thread-safe; all Add() calls come before View().
+    // Appends a chart's pyramid (charts are numbered in the order added). Not
+    // thread-safe; all Add() calls come before the first View(). Throws Error(Io) (a
+    // full disk): callers can keep the pyramids in memory instead.
     uint32_t Add(const stream::GeometryImage& image);
-    // The view of chart c; valid while the cache lives and no Add() follows.
+    // The view of chart c (the first call maps the file); valid while the cache lives.
     GeometryPyramid View(uint32_t c);
 
     size_t chart_count() const { return entries_.size(); }
-    uint64_t file_bytes() const { return file_.size(); }
+    uint64_t file_bytes() const { return size_; }
     uint64_t budget_bytes() const { return budget_; }
 
     struct Stats {
@@ -115,7 +117,12 @@ private:
         bool resident = false;
         uint64_t last_use = 0;
     };
-    MappedFile file_;
+    void DropPages(const Entry& e);
+
+    std::string path_;  // for messages; the file itself is unlinked
+    int fd_ = -1;
+    uint8_t* data_ = nullptr;  // the read-only mapping, once View() made it
+    uint64_t size_ = 0;
     uint64_t budget_ = 0;
     std::vector<Entry> entries_;
     mutable std::mutex mutex_;

@@ -22,6 +22,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sstream>
@@ -155,10 +156,11 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     // Charts' geometry pyramids, in a memory-mapped file whose resident part stays under
     // 1/32 of the memory budget beyond the pinned charts (geometry_cache.h): a pass over
     // the charts faults evicted pyramids back from the page cache, which costs far less
-    // than the pyramids' memory. Tiles are read a batch at a time.
-    GeometryCache geometry(opt.dir + "/solve", opt.memory / 32);
+    // than the pyramids' memory. Tiles are read a batch at a time. Without room on disk
+    // for the file, the pyramids stay in memory (the same bytes, so the same solution).
+    std::unique_ptr<GeometryCache> geometry;
     std::vector<SolveChart> charts(m.charts.size());
-    {
+    auto load_charts = [&](GeometryCache* cache) {
         const size_t batch = size_t(std::max(1, 2 * MaxThreads()));
         std::vector<stream::ChartTile> tiles;
         for (size_t first = 0; first < charts.size(); first += batch) {
@@ -169,9 +171,12 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                                      stream::TileParts::GeometryImage);
             });
             for (size_t k = 0; k < tiles.size(); ++k) {
-                const stream::ChartTile& tile = tiles[k];
+                stream::ChartTile& tile = tiles[k];
                 SolveChart& sc = charts[first + k];
-                CHECK_EQ(geometry.Add(tile.geometry), first + k);
+                if (cache)
+                    CHECK_EQ(cache->Add(tile.geometry), first + k);
+                else
+                    sc.geometry = GeometryPyramid(std::move(tile.geometry));
                 sc.scale = tile.meta.scale;
                 int level = 0;
                 while ((1u << level) < tile.meta.resolution)
@@ -179,9 +184,20 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                 sc.max_level = level;
             }
         }
+        if (cache)
+            for (uint32_t c = 0; c < charts.size(); ++c)
+                charts[c].geometry = cache->View(c);
+    };
+    try {
+        geometry = std::make_unique<GeometryCache>(opt.dir + "/solve", opt.memory / 32);
+        load_charts(geometry.get());
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Io)
+            throw;
+        spdlog::warn("{}; the geometry pyramids stay in memory", e.what());
+        geometry.reset();
+        load_charts(nullptr);
     }
-    for (uint32_t c = 0; c < charts.size(); ++c)
-        charts[c].geometry = geometry.View(c);
     LogMemory("geometry pyramids loaded");
 
     // Small emissive surfaces -> polygon lights.
@@ -323,10 +339,10 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["leaves"] = st.leaves;
     j["field_bytes"] = st.field_bytes;
     j["embree_bytes"] = EmbreePeakMemoryBytes();
-    {
-        const GeometryCache::Stats gs = geometry.stats();
-        j["geometry"] = {{"file_bytes", geometry.file_bytes()},
-                         {"budget_bytes", geometry.budget_bytes()},
+    if (geometry) {
+        const GeometryCache::Stats gs = geometry->stats();
+        j["geometry"] = {{"file_bytes", geometry->file_bytes()},
+                         {"budget_bytes", geometry->budget_bytes()},
                          {"peak_resident_bytes", gs.peak_resident_bytes},
                          {"evictions", gs.evictions}};
     }
