@@ -647,8 +647,9 @@ void Solver::Run(const Progress& progress) {
             }
         }
         std::vector<float> e(pts.size() * 9, 0.f);
-        // In chunks (each point's light is its own): the rays of every chart's points at
-        // once took memory in proportion to the chart count, +106 MB at 4M triangles.
+        // In chunks (each point's light is its own, so the same bits): the rays of every
+        // chart's points at once took memory in proportion to the chart count (~60 MiB of
+        // the peak at 16M triangles).
         constexpr size_t kChunk = 256;
         for (size_t p0 = 0; p0 < pts.size() && !direct.empty(); p0 += kChunk) {
             const size_t n = std::min(kChunk, pts.size() - p0);
