@@ -77,8 +77,7 @@ Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
     // interpolated. Continuity matters: where light grazes, a horizon that jumped from
     // node to node showed as blocks.
     constexpr int kHorizonLevel = 3;
-    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()),
-                                  u, v)
+    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()), u, v)
         .normal;
 }
 
@@ -90,8 +89,7 @@ Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
     // offset), so rays from there hit the surface they leave and the sky went dark
     // between texel centres.
     const int finest = sc.geometry.finest_level();
-    return level >= finest ? smp.vis_point
-                           : SampleBilinear(sc.geometry, finest, u, v).vis_point;
+    return level >= finest ? smp.vis_point : SampleBilinear(sc.geometry, finest, u, v).vis_point;
 }
 
 float Solver::RayOffset(uint32_t chart) const {
@@ -482,8 +480,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             *center = g.position;
             *radius = g.radius;
         } else {
-            auto smp =
-                SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+            auto smp = SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
             *center = smp.position;
             *radius = float(sc.scale * node.size() * 0.75);
         }
