@@ -94,7 +94,8 @@ int RunExport(const ExportCommand& c) {
     mo.compression = ParseCompression(c.compression);
     mo.tone = tone;
 
-    solve::BakeView view = solve::OpenBakeView(c.dir);
+    // Fields are read a chart at a time: memory follows the charts being written.
+    solve::BakeView view = solve::OpenBakeView(c.dir, solve::FieldLoading::OnDemand);
     solve::AtlasOptions ao;
     ao.max_size = c.max_atlas;
     ao.gutter = c.gutter;

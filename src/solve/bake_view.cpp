@@ -10,7 +10,7 @@
 
 namespace mebake::solve {
 
-BakeView OpenBakeView(const std::string& dir) {
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
     BakeView v;
     v.dir = dir;
     v.manifest = stream::ReadManifest(dir);
@@ -20,17 +20,39 @@ BakeView OpenBakeView(const std::string& dir) {
     const std::string sol = SolutionPath(dir);
     if (!std::filesystem::exists(sol))
         UsageError("{}: not solved yet; run `mebake solve {}` first", dir, dir);
-    v.solution = ReadSolution(sol);
-    if (v.solution.fields.size() != v.manifest.charts.size())
-        CorruptError({sol}, "{} charts solved but the manifest lists {}", v.solution.fields.size(),
+    size_t charts = 0;
+    int blocks = 0;
+    if (fields == FieldLoading::All) {
+        v.solution = ReadSolution(sol);
+        charts = v.solution.fields.size();
+        for (const auto& f : v.solution.fields)
+            if (f.blocks() != (v.solution.radiosity ? 3 : 9))
+                blocks = f.blocks();
+    } else {
+        v.solution_reader = std::make_shared<const SolutionReader>(sol);
+        v.solution.radiosity = v.solution_reader->radiosity();
+        charts = v.solution_reader->chart_count();
+        if (v.solution_reader->blocks() != (v.solution.radiosity ? 3 : 9))
+            blocks = v.solution_reader->blocks();
+    }
+    if (charts != v.manifest.charts.size())
+        CorruptError({sol}, "{} charts solved but the manifest lists {}", charts,
                      v.manifest.charts.size());
-    for (const auto& f : v.solution.fields)
-        if (f.blocks() != (v.solution.radiosity ? 3 : 9))
-            CorruptError({sol}, "{} blocks per node for a {} solution", f.blocks(),
-                         v.solution.radiosity ? "radiosity" : "vector irradiance");
+    if (blocks != 0)
+        CorruptError({sol}, "{} blocks per node for a {} solution", blocks,
+                     v.solution.radiosity ? "radiosity" : "vector irradiance");
     const std::string kept = dir + "/solve/scene.json";
     v.scene = LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
     return v;
+}
+
+std::shared_ptr<const ChartField> BakeView::Field(uint32_t c) const {
+    if (solution_reader)
+        return std::make_shared<const ChartField>(solution_reader->Read(c));
+    CHECK_LT(c, solution.fields.size());
+    // Not owning: the view holds the field.
+    return std::shared_ptr<const ChartField>(std::shared_ptr<const ChartField>(),
+                                             &solution.fields[c]);
 }
 
 std::vector<uint32_t> ChartResolutions(const BakeView& view) {

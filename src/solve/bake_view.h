@@ -20,6 +20,7 @@
 #include "stream/tile.h"
 
 #include <algorithm>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -30,17 +31,26 @@ struct BakeView {
     std::string dir;
     stream::Manifest manifest;
     Scene scene;
-    Solution solution;
+    Solution solution;  // fields empty when opened with FieldLoading::OnDemand
+    std::shared_ptr<const SolutionReader> solution_reader;  // OnDemand only
 
     size_t chart_count() const { return manifest.charts.size(); }
     std::string TilePath(uint32_t chart) const { return stream::TilePath(dir, chart); }
+    // Chart c's field: solution.fields[c], or read from solve/solution.bin on demand (then
+    // the pointer owns it). Thread-safe.
+    std::shared_ptr<const ChartField> Field(uint32_t c) const;
 };
+
+// All: every chart's field is read and checked at open (render and reference, which
+// look lighting up anywhere). OnDemand: one chart's at a time through BakeView::Field, so
+// resident memory follows the charts being written (export).
+enum class FieldLoading { All, OnDemand };
 
 // Reads the manifest, solve/solution.bin and the scene the solve used (solve/scene.json
 // when the solve had one, else the inputs' materials and the default rig). Throws
 // Error(Usage) when the directory is not ingested or not solved, Error(Corrupt) naming the
 // file when the solution does not match the charts.
-BakeView OpenBakeView(const std::string& dir);
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields = FieldLoading::All);
 
 // The resolution of every chart from the manifest, validated (Error(Corrupt) otherwise).
 std::vector<uint32_t> ChartResolutions(const BakeView& view);

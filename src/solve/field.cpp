@@ -1,9 +1,9 @@
 #include "solve/field.h"
 
+#include "core/check.h"
+
 #include <algorithm>
 #include <cstring>
-
-#include "core/check.h"
 
 namespace mebake::solve {
 
@@ -12,7 +12,13 @@ ChartField::ChartField(int order, int blocks)
     nodes_.push_back(QuadNode{});
     value_.assign(size_t(stride_), 0.f);
     unshot_.assign(size_t(stride_), 0.f);
-    pending_.assign(size_t(stride_), 0.f);
+}
+
+float* ChartField::pending(size_t n) {
+    DCHECK_LT(n, nodes_.size());
+    if (pending_.empty())
+        pending_.assign(value_.size(), 0.f);
+    return &pending_[n * size_t(stride_)];
 }
 
 int32_t ChartField::Subdivide(size_t n) {
@@ -22,9 +28,12 @@ int32_t ChartField::Subdivide(size_t n) {
     const QuadNode parent = nodes_[n];
     nodes_[n].first_child = first;
     const size_t s = size_t(stride_);
+    const bool unshot = has_unshot();
     value_.resize(value_.size() + 4 * s, 0.f);
-    unshot_.resize(unshot_.size() + 4 * s, 0.f);
-    pending_.resize(pending_.size() + 4 * s, 0.f);
+    if (unshot)
+        unshot_.resize(unshot_.size() + 4 * s, 0.f);
+    if (!pending_.empty())
+        pending_.resize(pending_.size() + 4 * s, 0.f);
     for (int c = 0; c < 4; ++c) {
         QuadNode k;
         k.level = uint8_t(parent.level + 1);
@@ -33,7 +42,8 @@ int32_t ChartField::Subdivide(size_t n) {
         nodes_.push_back(k);
         const size_t kid = size_t(first + c);
         Push(order_, c, &value_[n * s], blocks_, &value_[kid * s]);
-        Push(order_, c, &unshot_[n * s], blocks_, &unshot_[kid * s]);
+        if (unshot)
+            Push(order_, c, &unshot_[n * s], blocks_, &unshot_[kid * s]);
     }
     return first;
 }
@@ -61,6 +71,7 @@ void ChartField::EvalValue(double u, double v, float* out) const {
 }
 
 void ChartField::EvalUnshot(double u, double v, float* out) const {
+    CHECK(has_unshot());
     double s, t;
     size_t n = LeafAt(u, v, &s, &t);
     EvalCoeffs(order_, unshot(n), blocks_, s, t, out);
@@ -69,10 +80,11 @@ void ChartField::EvalUnshot(double u, double v, float* out) const {
 void ChartField::PushDown(size_t n, const float* add) {
     const size_t s = size_t(stride_);
     if (nodes_[n].leaf()) {
-        for (size_t k = 0; k < s; ++k) {
+        for (size_t k = 0; k < s; ++k)
             value_[n * s + k] += add[k];
-            unshot_[n * s + k] += add[k];
-        }
+        if (has_unshot())
+            for (size_t k = 0; k < s; ++k)
+                unshot_[n * s + k] += add[k];
         return;
     }
     float child[kMaxCoeffs * 9];
@@ -86,13 +98,15 @@ void ChartField::PushDown(size_t n, const float* add) {
 void ChartField::PushPending() {
     const size_t s = size_t(stride_);
     float add[kMaxCoeffs * 9];
-    for (size_t n = 0; n < nodes_.size(); ++n) {
+    for (size_t n = 0; n < pending_.size() / s; ++n) {
         float* p = &pending_[n * s];
-        if (std::all_of(p, p + s, [](float x) { return x == 0.f; })) continue;
+        if (std::all_of(p, p + s, [](float x) { return x == 0.f; }))
+            continue;
         std::memcpy(add, p, s * sizeof(float));
         std::fill(p, p + s, 0.f);
         PushDown(n, add);
     }
+    std::vector<float>().swap(pending_);
     Pull();
 }
 
@@ -100,27 +114,37 @@ void ChartField::Pull() {
     const size_t s = size_t(stride_);
     // Children always have larger indices than their parent: a reverse sweep is bottom-up.
     for (size_t n = nodes_.size(); n-- > 0;) {
-        if (nodes_[n].leaf()) continue;
+        if (nodes_[n].leaf())
+            continue;
         const size_t c0 = size_t(nodes_[n].first_child);
         const float* kv[4] = {&value_[c0 * s], &value_[(c0 + 1) * s], &value_[(c0 + 2) * s],
                               &value_[(c0 + 3) * s]};
-        const float* ku[4] = {&unshot_[c0 * s], &unshot_[(c0 + 1) * s], &unshot_[(c0 + 2) * s],
-                              &unshot_[(c0 + 3) * s]};
+        const float* ku[4] = {};
+        if (has_unshot())
+            for (int c = 0; c < 4; ++c)
+                ku[c] = &unshot_[(c0 + size_t(c)) * s];
         solve::Pull(order_, kv, blocks_, &value_[n * s]);
-        solve::Pull(order_, ku, blocks_, &unshot_[n * s]);
+        if (has_unshot())
+            solve::Pull(order_, ku, blocks_, &unshot_[n * s]);
     }
+    nodes_.shrink_to_fit();
+    value_.shrink_to_fit();
+    unshot_.shrink_to_fit();
 }
 
-void ChartField::ClearUnshot() { std::fill(unshot_.begin(), unshot_.end(), 0.f); }
+void ChartField::ClearUnshot() {
+    std::fill(unshot_.begin(), unshot_.end(), 0.f);
+}
 
 void ChartField::Assign(std::vector<QuadNode> nodes, std::vector<float> value,
                         std::vector<float> unshot) {
     CHECK_EQ(value.size(), nodes.size() * size_t(stride_));
-    CHECK_EQ(unshot.size(), nodes.size() * size_t(stride_));
+    CHECK(unshot.empty() || unshot.size() == nodes.size() * size_t(stride_));
     nodes_ = std::move(nodes);
     value_ = std::move(value);
     unshot_ = std::move(unshot);
-    pending_.assign(value_.size(), 0.f);
+    pending_.clear();
+    pending_.shrink_to_fit();
 }
 
 size_t ChartField::MemoryBytes() const {

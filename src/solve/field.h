@@ -2,26 +2,30 @@
 // nodes hold polynomial coefficients (basis.h) for `blocks` scalar functions — 9 for
 // vector irradiance (3 colours x 3 components), 3 for radiosity.
 //
-// Per node there are three coefficient sets:
+// Per node there are up to three coefficient sets:
 //   value    gathered lighting; after Push() the leaves hold the complete solution and
 //            interior nodes their L2 projection (Pull), which coarse emitters read;
 //   unshot   the part of `value` not yet shot to other surfaces (Southwell residual);
-//   pending  lighting gathered at this node during a batch, not yet pushed to leaves.
-// Storage is pooled in flat arrays indexed by node, so memory follows the node count.
+//            absent in a field read from a solution (values only: export, render);
+//   pending  lighting gathered at this node during a batch, not yet pushed to leaves:
+//            allocated by the first pending() call and freed by PushPending(), so only
+//            the charts being gathered hold it.
+// Storage is pooled in flat arrays indexed by node, so memory follows the node count; Pull()
+// (the end of refinement and of every gather) trims the arrays' spare capacity.
 #pragma once
+
+#include "solve/basis.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
-
-#include "solve/basis.h"
 
 namespace mebake::solve {
 
 struct QuadNode {
     int32_t first_child = -1;  // four consecutive nodes in basis.h quadrant order
     uint8_t level = 0;
-    uint32_t i = 0, j = 0;     // covers [i, i+1] x [j, j+1] / 2^level of the chart square
+    uint32_t i = 0, j = 0;  // covers [i, i+1] x [j, j+1] / 2^level of the chart square
 
     bool leaf() const { return first_child < 0; }
     double size() const { return 1.0 / double(1u << level); }
@@ -43,9 +47,11 @@ public:
 
     float* value(size_t n) { return &value_[n * size_t(stride_)]; }
     float* unshot(size_t n) { return &unshot_[n * size_t(stride_)]; }
-    float* pending(size_t n) { return &pending_[n * size_t(stride_)]; }
+    float* pending(size_t n);
     const float* value(size_t n) const { return &value_[n * size_t(stride_)]; }
     const float* unshot(size_t n) const { return &unshot_[n * size_t(stride_)]; }
+
+    bool has_unshot() const { return !unshot_.empty(); }
 
     // Makes four children of a leaf; their value and unshot are the parent's restricted
     // (Push), pending zero. Returns the first child's index.
@@ -68,6 +74,7 @@ public:
     const std::vector<QuadNode>& nodes() const { return nodes_; }
     const std::vector<float>& values() const { return value_; }
     const std::vector<float>& unshots() const { return unshot_; }
+    // An empty `unshot` makes a values-only field (has_unshot() false).
     void Assign(std::vector<QuadNode> nodes, std::vector<float> value, std::vector<float> unshot);
     size_t MemoryBytes() const;
 

@@ -25,29 +25,32 @@ std::string Extension(const std::string& path) {
     return e;
 }
 
-// The tiles and shaders of one shelf.
-struct ShelfCharts {
+// The tiles and shaders of a group of charts.
+struct ChartGroup {
     std::vector<stream::ChartTile> tiles;
+    std::vector<std::shared_ptr<const ChartField>> fields;
     std::vector<std::unique_ptr<ChartShader>> shaders;
 };
 
-ShelfCharts LoadShelf(const BakeView& view, const Atlas& atlas, const AtlasShelf& shelf) {
-    ShelfCharts s;
-    const size_t n = shelf.charts.size();
-    s.tiles.resize(n);
-    s.shaders.resize(n);
+ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const uint32_t> charts) {
+    ChartGroup g;
+    const size_t n = charts.size();
+    g.tiles.resize(n);
+    g.fields.resize(n);
+    g.shaders.resize(n);
     ParallelFor(0, int64_t(n), [&](int64_t k) {
-        const uint32_t c = shelf.charts[size_t(k)];
+        const uint32_t c = charts[size_t(k)];
         const std::string path = view.TilePath(c);
-        auto& tile = s.tiles[size_t(k)];
+        auto& tile = g.tiles[size_t(k)];
         tile = stream::ReadTile(path, stream::TileParts::Mesh);
         if (tile.meta.resolution != atlas.charts[c].resolution)
             CorruptError({path}, "resolution {} but the manifest says {}", tile.meta.resolution,
                          atlas.charts[c].resolution);
-        s.shaders[size_t(k)] = std::make_unique<ChartShader>(
-            tile, view.solution.fields[c], view.solution.radiosity, view.scene, path);
+        g.fields[size_t(k)] = view.Field(c);
+        g.shaders[size_t(k)] = std::make_unique<ChartShader>(
+            tile, *g.fields[size_t(k)], view.solution.radiosity, view.scene, path);
     });
-    return s;
+    return g;
 }
 
 }  // namespace
@@ -100,45 +103,61 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
 }
 
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows) {
+                 const PageSink& sink, uint32_t band_rows, size_t group) {
     CHECK_LT(page, atlas.pages.size());
     CHECK_GE(band_rows, 1u);
     const AtlasPage& pg = atlas.pages[page];
     const size_t nc = size_t(MapChannels(content)), stride = size_t(pg.width) * nc;
-    std::vector<float> band;
+    // A shelf's rows are computed into one buffer, a group of charts at a time, then
+    // handed out in bands: memory holds one shelf's rows and one group's tiles, however
+    // many charts a shelf has (an 8192-wide page holds 62 charts of 128 texels per shelf).
+    if (group == 0)
+        group = size_t(std::max(1, 2 * MaxThreads()));
+    std::vector<float> rows_buffer;
     uint32_t y = 0;
+    auto emit = [&](uint32_t first, uint32_t count) {  // rows of rows_buffer
+        for (uint32_t r = 0; r < count;) {
+            const uint32_t n = std::min(band_rows, count - r);
+            sink(
+                std::span<const float>(rows_buffer.data() + size_t(r) * stride, size_t(n) * stride),
+                first + r, n);
+            r += n;
+        }
+        y = first + count;
+    };
     auto emit_empty = [&](uint32_t until) {
+        if (y >= until)
+            return;
+        rows_buffer.assign(size_t(std::min(band_rows, until - y)) * stride, 0.f);
         while (y < until) {
             const uint32_t rows = std::min(band_rows, until - y);
-            band.assign(size_t(rows) * stride, 0.f);
-            sink(band, y, rows);
+            sink(std::span<const float>(rows_buffer.data(), size_t(rows) * stride), y, rows);
             y += rows;
         }
     };
     for (const AtlasShelf& shelf : pg.shelves) {
         emit_empty(shelf.y);
         CHECK_EQ(y, shelf.y);
-        ShelfCharts charts = LoadShelf(view, atlas, shelf);
-        const size_t n = shelf.charts.size();
-        const uint32_t end = shelf.y + shelf.height;
-        while (y < end) {
-            const uint32_t rows = std::min(band_rows, end - y);
-            band.assign(size_t(rows) * stride, 0.f);
+        rows_buffer.assign(size_t(shelf.height) * stride, 0.f);
+        const std::span<const uint32_t> all(shelf.charts);
+        for (size_t first = 0; first < all.size(); first += group) {
+            const auto charts = all.subspan(first, std::min(group, all.size() - first));
+            const ChartGroup g = LoadCharts(view, atlas, charts);
             // One task per (chart, row): each writes its own texels only.
-            ParallelFor(0, int64_t(n) * rows, [&](int64_t task) {
+            const uint32_t rows = shelf.height;
+            ParallelFor(0, int64_t(charts.size()) * rows, [&](int64_t task) {
                 const size_t k = size_t(task) / rows;
                 const uint32_t r = uint32_t(size_t(task) % rows);
-                const uint32_t c = shelf.charts[k];
+                const uint32_t c = charts[k];
                 const AtlasChart& ac = atlas.charts[c];
-                const uint32_t by = y + r - ac.y;
+                const uint32_t by = shelf.y + r - ac.y;
                 if (by >= atlas.block(c))
                     return;  // a smaller block than the shelf's height
-                float* out = band.data() + size_t(r) * stride + size_t(ac.x) * nc;
-                FillChartBlock(*charts.shaders[k], atlas, c, content, by, by + 1, out, stride);
+                float* out = rows_buffer.data() + size_t(r) * stride + size_t(ac.x) * nc;
+                FillChartBlock(*g.shaders[k], atlas, c, content, by, by + 1, out, stride);
             });
-            sink(band, y, rows);
-            y += rows;
         }
+        emit(shelf.y, shelf.height);
     }
     emit_empty(pg.height);
 }

@@ -4,8 +4,9 @@
 //
 // Every texel of a chart's square is shaded at its centre with the tile's full-resolution
 // normal and albedo (bake_view.h ChartShader::AtUv); gutter texels repeat the nearest
-// border texel; texels outside every chart are 0. Pages are computed shelf by shelf and
-// handed out in bands of rows, so memory holds one band and one shelf's tiles, not a page.
+// border texel; texels outside every chart are 0. Pages are computed shelf by shelf, a
+// group of charts (two per thread) at a time, and handed out in bands of rows, so memory
+// holds one shelf's rows and one group's tiles, not a page nor a whole shelf's tiles.
 //
 // Contents:
 //   Radiosity   channels R, G, B = B in W/m^2 (linear, >= 0) and A = 1 on chart blocks
@@ -40,9 +41,10 @@ std::vector<std::string> MapChannelNames(MapContent content);
 using PageSink =
     std::function<void(std::span<const float> pixels, uint32_t first_row, uint32_t rows)>;
 
-// Computes one page and streams it to `sink` in bands of at most band_rows rows.
+// Computes one page and streams it to `sink` in bands of at most band_rows rows, holding
+// the tiles of `group` charts at a time (0: two per thread).
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows = 64);
+                 const PageSink& sink, uint32_t band_rows = 64, size_t group = 0);
 
 // Fills block rows [row_begin, row_end) of one chart's block (gutters included): `out`
 // points at texel (0, row_begin) of the block, rows `stride` floats apart, MapChannels

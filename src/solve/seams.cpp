@@ -57,8 +57,8 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
     std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) {
         return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.tri < y.tri;
     });
-    ChartShader shader(tile, view.solution.fields[c], view.solution.radiosity, view.scene,
-                       view.TilePath(c));
+    const auto field = view.Field(c);
+    ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c));
     const uint64_t nv = view.manifest.vertex_count;
     std::vector<EdgeSamples> out;
     for (size_t i = 0; i < edges.size();) {

@@ -1,5 +1,6 @@
 #include "solve/solution.h"
 
+#include "core/check.h"
 #include "core/error.h"
 #include "io/chunk_file.h"
 
@@ -71,32 +72,43 @@ void WriteSolution(const std::string& path, const std::vector<ChartField>& field
     w.Finish(true);
 }
 
-Solution ReadSolution(const std::string& path) {
-    io::ChunkReader r(path, Tag("SOLN"), kSolutionVersion, kSolutionVersion);
-    auto hb = r.Read(Tag("HEAD"));
+SolutionReader::SolutionReader(const std::string& path)
+    : path_(path), reader_(path, Tag("SOLN"), kSolutionVersion, kSolutionVersion) {
+    auto hb = reader_.Read(Tag("HEAD"));
     Header h{};
     if (hb.size() != sizeof(h))
         CorruptError({path}, "HEAD chunk has the wrong size");
     std::memcpy(&h, hb.data(), sizeof(h));
     if (h.order > 3 || (h.blocks != 3 && h.blocks != 9) || h.charts > (1u << 28))
         CorruptError({path}, "HEAD chunk is inconsistent");
+    radiosity_ = h.radiosity != 0;
+    order_ = int(h.order);
+    blocks_ = int(h.blocks);
+    charts_ = h.charts;
+}
+
+ChartField SolutionReader::Read(uint32_t c) const {
+    CHECK_LT(c, charts_);
+    auto packed = reader_.ReadArray<PackedNode>(Tag("NODE"), c);
+    auto coef = reader_.ReadArray<float>(Tag("COEF"), c);
+    ChartField f(order_, blocks_);
+    std::vector<QuadNode> nodes = UnpackNodes(packed, path_, c);
+    if (nodes.empty() || coef.size() != nodes.size() * size_t(f.stride()))
+        CorruptError({path_}, "chart {}: {} coefficients for {} nodes", c, coef.size(),
+                     nodes.size());
+    for (float x : coef)
+        if (!std::isfinite(x))
+            CorruptError({path_}, "chart {}: non-finite coefficient", c);
+    f.Assign(std::move(nodes), std::move(coef), {});  // values only: nothing shoots
+    return f;
+}
+
+Solution ReadSolution(const std::string& path) {
+    const SolutionReader r(path);
     Solution s;
-    s.radiosity = h.radiosity != 0;
-    for (uint32_t c = 0; c < h.charts; ++c) {
-        auto packed = r.ReadArray<PackedNode>(Tag("NODE"), c);
-        auto coef = r.ReadArray<float>(Tag("COEF"), c);
-        ChartField f(int(h.order), int(h.blocks));
-        std::vector<QuadNode> nodes = UnpackNodes(packed, path, c);
-        if (nodes.empty() || coef.size() != nodes.size() * size_t(f.stride()))
-            CorruptError({path}, "chart {}: {} coefficients for {} nodes", c, coef.size(),
-                         nodes.size());
-        for (float x : coef)
-            if (!std::isfinite(x))
-                CorruptError({path}, "chart {}: non-finite coefficient", c);
-        std::vector<float> unshot(coef.size(), 0.f);
-        f.Assign(std::move(nodes), std::move(coef), std::move(unshot));
-        s.fields.push_back(std::move(f));
-    }
+    s.radiosity = r.radiosity();
+    for (uint32_t c = 0; c < r.chart_count(); ++c)
+        s.fields.push_back(r.Read(c));
     return s;
 }
 

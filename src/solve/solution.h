@@ -2,6 +2,7 @@
 // quadtree with its coefficients per chart. Export and render read it with the tiles.
 #pragma once
 
+#include "io/chunk_file.h"
 #include "solve/field.h"
 
 #include <string>
@@ -37,5 +38,26 @@ struct Solution {
 };
 // Throws Error(Corrupt) naming the file on any inconsistency.
 Solution ReadSolution(const std::string& path);
+
+// One chart of a solution at a time (export holds only the charts it is writing). Read()
+// may be called from several threads.
+class SolutionReader {
+public:
+    // Reads and checks the header; throws like ReadSolution.
+    explicit SolutionReader(const std::string& path);
+    bool radiosity() const { return radiosity_; }
+    int order() const { return order_; }
+    int blocks() const { return blocks_; }
+    uint32_t chart_count() const { return charts_; }
+    // Chart c's field, values only; throws Error(Corrupt) naming the file and chart.
+    ChartField Read(uint32_t c) const;
+
+private:
+    std::string path_;
+    io::ChunkReader reader_;
+    bool radiosity_ = false;
+    int order_ = 0, blocks_ = 0;
+    uint32_t charts_ = 0;
+};
 
 }  // namespace mebake::solve

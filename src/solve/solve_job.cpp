@@ -1,5 +1,6 @@
 #include "solve/solve_job.h"
 
+#include "core/check.h"
 #include "core/checksum.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -8,6 +9,7 @@
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
 #include "solve/checkpoint.h"
+#include "solve/geometry_cache.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/solution.h"
@@ -20,6 +22,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sstream>
@@ -75,6 +78,12 @@ private:
     struct sigaction old_int_ {
     }, old_term_{};
 };
+
+// Resident memory at a stage boundary (where memory goes, issue 7).
+void LogMemory(const char* stage) {
+    spdlog::debug("memory after {}: {} resident, {} peak", stage, FormatBytes(CurrentRssBytes()),
+                  FormatBytes(PeakRssBytes()));
+}
 
 // Canonical text of everything besides the tiles that the solution depends on.
 std::string SettingsText(const Scene& scene, const std::string& scene_file) {
@@ -144,18 +153,52 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         }
     }
 
-    // Charts' geometry images (in memory for now; a tile cache will bound this).
+    // Charts' geometry pyramids, in a memory-mapped file whose resident part stays under
+    // 1/32 of the memory budget beyond the pinned charts (geometry_cache.h): a pass over
+    // the charts faults evicted pyramids back from the page cache, which costs far less
+    // than the pyramids' memory. Tiles are read a batch at a time. Without room on disk
+    // for the file, the pyramids stay in memory (the same bytes, so the same solution).
+    std::unique_ptr<GeometryCache> geometry;
     std::vector<SolveChart> charts(m.charts.size());
-    ParallelFor(0, int64_t(charts.size()), [&](int64_t c) {
-        auto tile = stream::ReadTile(stream::TilePath(opt.dir, uint32_t(c)),
+    auto load_charts = [&](GeometryCache* cache) {
+        const size_t batch = size_t(std::max(1, 2 * MaxThreads()));
+        std::vector<stream::ChartTile> tiles;
+        for (size_t first = 0; first < charts.size(); first += batch) {
+            tiles.assign(std::min(batch, charts.size() - first), {});
+            ParallelFor(0, int64_t(tiles.size()), [&](int64_t k) {
+                tiles[size_t(k)] =
+                    stream::ReadTile(stream::TilePath(opt.dir, uint32_t(first) + uint32_t(k)),
                                      stream::TileParts::GeometryImage);
-        charts[size_t(c)].geometry = std::move(tile.geometry);
-        charts[size_t(c)].scale = tile.meta.scale;
-        int level = 0;
-        while ((1u << level) < tile.meta.resolution)
-            ++level;
-        charts[size_t(c)].max_level = level;
-    });
+            });
+            for (size_t k = 0; k < tiles.size(); ++k) {
+                stream::ChartTile& tile = tiles[k];
+                SolveChart& sc = charts[first + k];
+                if (cache)
+                    CHECK_EQ(cache->Add(tile.geometry), first + k);
+                else
+                    sc.geometry = GeometryPyramid(std::move(tile.geometry));
+                sc.scale = tile.meta.scale;
+                int level = 0;
+                while ((1u << level) < tile.meta.resolution)
+                    ++level;
+                sc.max_level = level;
+            }
+        }
+        if (cache)
+            for (uint32_t c = 0; c < charts.size(); ++c)
+                charts[c].geometry = cache->View(c);
+    };
+    try {
+        geometry = std::make_unique<GeometryCache>(opt.dir + "/solve", opt.memory / 32);
+        load_charts(geometry.get());
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Io)
+            throw;
+        spdlog::warn("{}; the geometry pyramids stay in memory", e.what());
+        geometry.reset();
+        load_charts(nullptr);
+    }
+    LogMemory("geometry pyramids loaded");
 
     // Small emissive surfaces -> polygon lights.
     bool any_emissive = false;
@@ -190,6 +233,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
 
     VisibilityScene vis;
     LoadProxy(opt.dir, vis);
+    LogMemory("visibility scene built");
     const double diag = Length(m.bbox_max - m.bbox_min);
     SolveOptions so;
     so.settings = scene.solver;
@@ -217,6 +261,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     // checkpoints never take more than ~3% of the solve (large fields on slow disks).
     double last_duration = 0;
     solver.SetBatchHook([&](int next_batch) {
+        LogMemory(fmt::format("batch {}", next_batch - 1).c_str());
         const bool stop = g_stop.load();
         const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
         const double interval = opt.checkpoint_interval > 0
@@ -246,6 +291,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     });
     if (tty)
         std::fprintf(stderr, "\n");
+    LogMemory("solver finished");
     const SolveStats& st = solver.stats();
     if (st.stop_reason == "interrupted") {
         if (solver.next_batch() < 0)
@@ -284,7 +330,8 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["rays"] = st.rays;
     for (size_t k = 0; k < st.rays_by_kind.size(); ++k)
         j["rays_by_kind"][kRayKindNames[k]] = st.rays_by_kind[k];
-    j["seconds"] = {{"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
+    j["seconds"] = {
+        {"total", total}, {"direct", st.seconds_direct}, {"indirect", st.seconds_indirect}};
     j["rays_per_second"] = st.seconds_direct + st.seconds_indirect > 0
                                ? double(st.rays) / (st.seconds_direct + st.seconds_indirect)
                                : 0.0;
@@ -292,6 +339,13 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["leaves"] = st.leaves;
     j["field_bytes"] = st.field_bytes;
     j["embree_bytes"] = EmbreePeakMemoryBytes();
+    if (geometry) {
+        const GeometryCache::Stats gs = geometry->stats();
+        j["geometry"] = {{"file_bytes", geometry->file_bytes()},
+                         {"budget_bytes", geometry->budget_bytes()},
+                         {"peak_resident_bytes", gs.peak_resident_bytes},
+                         {"evictions", gs.evictions}};
+    }
     j["peak_rss_bytes"] = PeakRssBytes();
     j["emitted_power"] = st.emitted_power;
     j["unshot_power"] = st.unshot_power;

@@ -61,6 +61,7 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
     emissive_.assign(charts_.size(), 0);
     if (opt_.shoot_emission) {
         for (size_t c = 0; c < charts_.size(); ++c) {
+            const GeometryPin pin = charts_[c].geometry.Pin();
             const auto& finest = charts_[c].geometry.levels.back();
             for (const auto& t : finest)
                 if (t.area > 0 && scene_.MaterialOf(t.material).emissive()) {
@@ -76,8 +77,7 @@ Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
     // interpolated. Continuity matters: where light grazes, a horizon that jumped from
     // node to node showed as blocks.
     constexpr int kHorizonLevel = 3;
-    return stream::SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()),
-                                  u, v)
+    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()), u, v)
         .normal;
 }
 
@@ -89,8 +89,7 @@ Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
     // offset), so rays from there hit the surface they leave and the sky went dark
     // between texel centres.
     const int finest = sc.geometry.finest_level();
-    return level >= finest ? smp.vis_point
-                           : stream::SampleBilinear(sc.geometry, finest, u, v).vis_point;
+    return level >= finest ? smp.vis_point : SampleBilinear(sc.geometry, finest, u, v).vis_point;
 }
 
 float Solver::RayOffset(uint32_t chart) const {
@@ -117,7 +116,7 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
         double s, t, w;
         GaussPoint2D(ng, p, &s, &t, &w);
         const float u = float(node.U(s)), v = float(node.V(t));
-        auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+        auto smp = SampleBilinear(sc.geometry, gl, u, v);
         pts->push_back({smp.position, smp.normal, VisPoint(sc, gl, u, v, smp),
                         horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
         albedo->push_back(Albedo(smp.material, smp.color));
@@ -144,6 +143,7 @@ void Solver::ToFieldValues(const std::vector<ReceiverPoint>& pts, const std::vec
 
 void Solver::RefineDirect(uint32_t chart) {
     const SolveChart& sc = charts_[chart];
+    const GeometryPin pin = sc.geometry.Pin();
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;
@@ -189,7 +189,7 @@ void Solver::RefineDirect(uint32_t chart) {
         };
         auto point = [&](int idx) {
             const auto [u, v] = uv(idx);
-            auto smp = stream::SampleBilinear(sc.geometry, gl, u, v);
+            auto smp = SampleBilinear(sc.geometry, gl, u, v);
             return std::make_pair(ReceiverPoint{smp.position, smp.normal,
                                                 VisPoint(sc, gl, u, v, smp), HorizonNormal(sc, u, v)},
                 Albedo(smp.material, smp.color));
@@ -352,6 +352,7 @@ void Solver::RefineDirect(uint32_t chart) {
 
 void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     const SolveChart& sc = charts_[chart];
+    const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
     const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
     e->chart = chart;
@@ -447,6 +448,7 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
 
 void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
     const SolveChart& sc = charts_[receiver];
+    const GeometryPin pin = sc.geometry.Pin();
     ChartField& field = fields_[receiver];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1;
     // A constant (M0) receiver node holds one E for its whole area, while the E of a source
@@ -478,8 +480,7 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             *center = g.position;
             *radius = g.radius;
         } else {
-            auto smp =
-                stream::SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+            auto smp = SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
             *center = smp.position;
             *radius = float(sc.scale * node.size() * 0.75);
         }
@@ -643,8 +644,15 @@ void Solver::Run(const Progress& progress) {
             }
         }
         std::vector<float> e(pts.size() * 9, 0.f);
-        if (!direct.empty() && !pts.empty())
-            direct.Evaluate(pts, e);
+        // In chunks (each point's light is its own, so the same bits): the rays of every
+        // chart's points at once took memory in proportion to the chart count (~60 MiB of
+        // the peak at 16M triangles).
+        constexpr size_t kChunk = 256;
+        for (size_t p0 = 0; p0 < pts.size() && !direct.empty(); p0 += kChunk) {
+            const size_t n = std::min(kChunk, pts.size() - p0);
+            direct.Evaluate(std::span<const ReceiverPoint>(pts).subspan(p0, n),
+                            std::span<float>(e).subspan(p0 * 9, n * 9));
+        }
         double ref = 0;
         for (size_t p = 0; p < pts.size(); ++p)
             for (int c = 0; c < 3; ++c) {

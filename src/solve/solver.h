@@ -24,14 +24,14 @@
 #include "solve/direct.h"
 #include "solve/field.h"
 #include "solve/scene.h"
-#include "stream/geometry_image.h"
+#include "solve/geometry_cache.h"
 
 namespace mebake::solve {
 
 class VisibilityScene;
 
 struct SolveChart {
-    stream::GeometryImage geometry;
+    GeometryPyramid geometry;  // hold geometry.Pin() while reading it
     double scale = 1;   // 3D length of the unit square's side
     int max_level = -1; // quadtree depth cap (the light-map texel); -1: the geometry's finest
 };

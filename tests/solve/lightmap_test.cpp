@@ -31,7 +31,7 @@ struct Page {
 };
 
 Page Compute(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-             uint32_t band = 5) {
+             uint32_t band = 5, size_t group = 0) {
     Page p;
     p.width = atlas.pages[page].width;
     p.height = atlas.pages[page].height;
@@ -45,7 +45,7 @@ Page Compute(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent
             p.px.insert(p.px.end(), px.begin(), px.end());
             next += rows;
         },
-        band);
+        band, group);
     EXPECT_EQ(next, p.height);
     return p;
 }
@@ -144,6 +144,35 @@ TEST_F(LightMapTest, SameBytesForAnyThreadCount) {
     }
     ASSERT_EQ(all.px.size(), one.px.size());
     EXPECT_EQ(0, std::memcmp(all.px.data(), one.px.data(), all.px.size() * sizeof(float)));
+}
+
+// One chart's tiles at a time, and fields read per chart from solution.bin (export's
+// FieldLoading::OnDemand), give the same bytes as everything held at once.
+TEST_F(LightMapTest, SameBytesChartByChartAndWithFieldsOnDemand) {
+    // Both charts side by side on one shelf (PackAtlas stacks them for this tiny bake).
+    Atlas atlas = atlas_;
+    const uint32_t block = atlas.block(0);
+    ASSERT_EQ(atlas.block(1), block);
+    atlas.pages.assign(1, AtlasPage{});
+    atlas.pages[0].width = 2 * block + 3;
+    atlas.pages[0].height = block + 5;
+    atlas.pages[0].shelves = {AtlasShelf{2, block, {0, 1}}};
+    atlas.charts[0] = {0, 0, 2, atlas.charts[0].resolution};
+    atlas.charts[1] = {0, block + 1, 2, atlas.charts[1].resolution};
+    for (MapContent content : {MapContent::Radiosity, MapContent::Irradiance}) {
+        const Page all = Compute(view_, atlas, 0, content, 64);
+        const Page one = Compute(view_, atlas, 0, content, 4, 1);
+        const BakeView lazy = OpenBakeView(dir_, FieldLoading::OnDemand);
+        EXPECT_TRUE(lazy.solution.fields.empty());
+        const Page on_demand = Compute(lazy, atlas, 0, content, 7, 1);
+        if (content == MapContent::Radiosity) {  // chart 1's texels are there (A = 1)
+            EXPECT_EQ(all.At(block + 1 + atlas.gutter + 1, 2 + atlas.gutter + 1, 3), 1.f);
+        }
+        for (const Page* p : {&one, &on_demand}) {
+            ASSERT_EQ(all.px.size(), p->px.size());
+            EXPECT_EQ(0, std::memcmp(all.px.data(), p->px.data(), all.px.size() * sizeof(float)));
+        }
+    }
 }
 
 TEST_F(LightMapTest, ExrAndPngFiles) {

@@ -20,7 +20,7 @@ struct Patch {
 
 inline Patch MakePatch(const Surface& f, int res, uint32_t material, double scale) {
     Patch p;
-    auto& img = p.chart.geometry;
+    stream::GeometryImage img;
     img.resolution = uint32_t(res);
     int levels = 0;
     while ((1 << levels) < res)
@@ -47,6 +47,7 @@ inline Patch MakePatch(const Surface& f, int res, uint32_t material, double scal
         }
     }
     img.BuildPyramid();
+    p.chart.geometry = GeometryPyramid(std::move(img));
     p.chart.scale = scale;
     for (int j = 0; j <= res; ++j)
         for (int i = 0; i <= res; ++i) {

@@ -160,7 +160,7 @@ TEST_P(Furnace, ConvergesToEmissionOverOneMinusAlbedo) {
     for (uint32_t c = 0; c < ts.charts.size(); ++c) {
         for (int k = 0; k < 50; ++k) {
             double u = (k % 7 + 0.5) / 7, v = (k / 7 % 7 + 0.5) / 7;
-            auto smp = stream::SampleBilinear(
+            auto smp = SampleBilinear(
                 ts.charts[c].geometry, ts.charts[c].geometry.finest_level(), float(u), float(v));
             Vec3f b = ShadeRadiosity(solver.fields()[c], false, u, v, smp.normal,
                                      Vec3f(rho, rho, rho), ts.scene.per_input[0][0]);
