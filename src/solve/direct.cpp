@@ -133,8 +133,8 @@ double DirectLight::EmittedPower() const {
 // 2 x 2 grids of cells whose corners are tested with one ray each (the classification rays
 // give the light's own vertices); a cell whose corners agree is taken as wholly visible or
 // hidden, one whose corners disagree is split in four, down to the finest grid, where a mixed
-// cell is visible as one fixed low-discrepancy point in it is (or, for points given a prior
-// by a node's probes, counts as 1/4 or 3/4 visible without a ray). Rays go only where a
+// cell counts as 1/4 or 3/4 visible (or, where the shadow edge runs along a row of cells, is
+// visible as one fixed low-discrepancy point in it is). Rays go only where a
 // shadow edge crosses the light, and all points of a level share one Embree batch.
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                            std::span<const size_t> penumbra, std::span<const uint8_t> classified,
@@ -282,36 +282,33 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
         }
         std::swap(cur, next);
     }
-    // Finest cells that a shadow edge crosses (all made by the last level). Points sharing a
-    // node's probes count them as partly visible without a ray: with one corner visible, the
-    // visible part is the corner's triangle cut off by the edge, s t of the cell for crossings
-    // at s and t along its two sides, 1/4 on average over uniform crossings (two corners:
-    // 3/4), with less variance than one ray (1/9 - 1/16 against 1/4 - 1/9). An edge parallel
-    // to a family of cell rows crosses them all at the same offset, which biases that by up
-    // to half a row: where four or more of a point's mixed cells in a fan triangle lie in one
-    // row of a family, and for probes and lone points, each mixed cell gets one ray to a fixed
-    // point of an R2 low-discrepancy sequence indexed by the cell (a shadow edge parallel to cell
-    // rows cuts the samples at varied offsets).
+    // Finest cells that a shadow edge crosses (all made by the last level) count as partly
+    // visible without a ray: with one corner visible, the visible part is the corner's
+    // triangle cut off by the edge, s t of the cell for crossings at s and t along its two
+    // sides, 1/4 on average over uniform crossings (two corners: 3/4), with less variance than
+    // one ray (1/9 - 1/16 against 1/4 - 1/9). An edge parallel to a family of cell rows crosses
+    // them all at the same offset, which biases that by up to half a row: where four or more
+    // of a point's mixed cells in a fan triangle lie in one row of a family, each mixed cell
+    // of the point gets one ray to a fixed point of an R2 low-discrepancy sequence indexed by
+    // the cell (a shadow edge parallel to cell rows cuts the samples at varied offsets).
     struct Span {
         int lo[3] = {1 << 20, 1 << 20, 1 << 20}, hi[3] = {-1, -1, -1}, count = 0;
     };
-    std::vector<Span> spans(prior ? penumbra.size() * nt : 0);  // per point and fan triangle
+    std::vector<Span> spans(penumbra.size() * nt);  // per point and fan triangle
     auto canonical = [](const Cell& c, int* a0, int* b0, bool* down) {
         *a0 = std::min({c.a[0], c.a[1], c.a[2]});
         *b0 = std::min({c.b[0], c.b[1], c.b[2]});
         *down = c.a[0] + c.a[1] + c.a[2] - 3 * *a0 == 2;
     };
-    if (prior) {
-        for (const Cell& c : finest) {
-            int a0, b0;
-            bool down;
-            canonical(c, &a0, &b0, &down);
-            Span& sp = spans[c.q * nt + c.t];
-            const int row[3] = {a0, b0, a0 + b0 + (down ? 1 : 0)};
-            for (int f = 0; f < 3; ++f)
-                sp.lo[f] = std::min(sp.lo[f], row[f]), sp.hi[f] = std::max(sp.hi[f], row[f]);
-            ++sp.count;
-        }
+    for (const Cell& c : finest) {
+        int a0, b0;
+        bool down;
+        canonical(c, &a0, &b0, &down);
+        Span& sp = spans[c.q * nt + c.t];
+        const int row[3] = {a0, b0, a0 + b0 + (down ? 1 : 0)};
+        for (int f = 0; f < 3; ++f)
+            sp.lo[f] = std::min(sp.lo[f], row[f]), sp.hi[f] = std::max(sp.hi[f], row[f]);
+        ++sp.count;
     }
     std::vector<uint8_t> aligned(spans.size() / std::max<size_t>(nt, 1), 0);
     for (size_t k = 0; k < spans.size(); ++k) {
@@ -324,7 +321,7 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     for (uint32_t k = 0; k < finest.size(); ++k) {
         const Cell& c = finest[k];
         const uint8_t* st = &state[c.q * nv];
-        if (prior && !aligned[c.q]) {
+        if (!aligned[c.q]) {
             const int visible = (st[vidx(c.t, c.a[0], c.b[0])] == 2) +
                                 (st[vidx(c.t, c.a[1], c.b[1])] == 2) +
                                 (st[vidx(c.t, c.a[2], c.b[2])] == 2);
