@@ -235,7 +235,19 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     };
     SegmentBatch batch;
     std::vector<std::pair<uint32_t, uint32_t>> asked;  // (point, vertex)
+    // A cell wholly below the point's horizon adds nothing whatever its visibility: no rays
+    // to its corners, no splitting (where the light sets, half of it can be below).
+    auto below = [&](const Cell& c) {
+        if (!cut[c.q])
+            return false;
+        const Vec3d x(points[penumbra[c.q]].position), h(points[penumbra[c.q]].horizon);
+        for (int k = 0; k < 3; ++k)
+            if (Dot(l.grid_pos[vidx(c.t, c.a[k], c.b[k])] - x, h) >= 0)
+                return false;
+        return true;
+    };
     while (!cur.empty()) {
+        cur.erase(std::remove_if(cur.begin(), cur.end(), below), cur.end());
         batch.Clear();
         asked.clear();
         for (const Cell& c : cur) {
