@@ -148,7 +148,11 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     const size_t nv = nt * per_t, nk = l.classify.size();
     // Vertex states per point: 0 unknown, 1 requested, 2 visible, 3 hidden.
     std::vector<uint8_t> state(penumbra.size() * nv, 0);
+    // Fan triangles t and t+1 share the edge v0 v[t+2]: its vertices (a, 0) in t+1 are
+    // (0, a) in t (the same point, computed the same way), so they are traced once.
     auto vidx = [&](size_t t, int a, int b) {
+        if (b == 0 && t > 0)
+            return (t - 1) * per_t + size_t(a) * size_t(g1);
         return t * per_t + size_t(b) * size_t(g1) + size_t(a);
     };
     for (size_t q = 0; q < penumbra.size(); ++q) {
