@@ -142,8 +142,9 @@ double DirectLight::EmittedPower() const {
 // give the light's own vertices); a cell whose corners agree is taken as wholly visible or
 // hidden, one whose corners disagree is split in four, down to the finest grid, where a mixed
 // cell counts as 1/4 or 3/4 visible (or, where the shadow edge runs along a row of cells, is
-// visible as one fixed low-discrepancy point in it is). Rays go only where a
-// shadow edge crosses the light, and all points of a level share one Embree batch.
+// visible as one fixed low-discrepancy point in it is). Corners well below the point's
+// horizon are not traced and do not count. Rays go only where a shadow edge crosses the
+// light, and all points of a level share one Embree batch.
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                            std::span<const size_t> penumbra, std::span<const uint8_t> classified,
                            const uint8_t* prior, std::vector<Vec3d>* e,
