@@ -11,12 +11,36 @@
 #include <numeric>
 
 namespace mebake::solve {
-
 namespace {
+
+// Penumbrae: light-grid vertices more than this (sine of the angle, ~3.4 degrees) below a
+// point's smooth horizon get no visibility ray and do not decide whether a cell is uniform.
+// E ignores light below that horizon, but the real surface departs from it: just below, a
+// visible vertex still says the light above it is visible (a convex bump falls away). At 0
+// the noisy sphere's penumbra rays halve again but the bunny's error grew by 0.03 points;
+// 0.06 left it unchanged (bench/RESULTS.md, "Speed, session 3").
+constexpr double kHorizonMargin = 0.06;
 
 // The point with barycentrics (a, b) in fan triangle `tri` of a polygon.
 Vec3d PolygonPoint(const std::vector<Vec3d>& v, size_t tri, double a, double b) {
     return v[0] + (v[tri + 1] - v[0]) * a + (v[tri + 2] - v[0]) * b;
+}
+
+// Lambert's boundary sum over a planar polygon seen from x, sum_k theta_k unit(a_k x e_k)
+// (as in polygon_light.cpp); E = -L/2 times it in front of a counter-clockwise polygon.
+Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
+    Vec3d sum;
+    for (int k = 0; k < nv; ++k) {
+        const Vec3d& p = v[k];
+        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
+        const Vec3d a = p - x, b = q - x;
+        const Vec3d c = Cross(a, q - p);
+        const double len = Length(c);
+        if (!(len > 0))
+            continue;
+        sum += c * (std::atan2(len, Dot(a, b)) / len);
+    }
+    return sum;
 }
 
 // Orthonormal frame with n as z (Duff et al. 2017).
@@ -117,8 +141,10 @@ double DirectLight::EmittedPower() const {
 // 2 x 2 grids of cells whose corners are tested with one ray each (the classification rays
 // give the light's own vertices); a cell whose corners agree is taken as wholly visible or
 // hidden, one whose corners disagree is split in four, down to the finest grid, where a mixed
-// cell is visible as one fixed low-discrepancy point in it is. Rays go only where a shadow
-// edge crosses the light, and all points of a level share one Embree batch.
+// cell counts as 1/4 or 3/4 visible (or, where the shadow edge runs along a row of cells, is
+// visible as one fixed low-discrepancy point in it is). Corners well below the point's
+// horizon are not traced and do not count. Rays go only where a shadow edge crosses the
+// light, and all points of a level share one Embree batch.
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                            std::span<const size_t> penumbra, std::span<const uint8_t> classified,
                            const uint8_t* prior, std::vector<Vec3d>* e,
@@ -129,10 +155,13 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     const int g = l.grid, g1 = g + 1;
     const size_t nt = l.vertices.size() - 2, per_t = size_t(g1) * size_t(g1);
     const size_t nv = nt * per_t, nk = l.classify.size();
-    const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
     // Vertex states per point: 0 unknown, 1 requested, 2 visible, 3 hidden.
     std::vector<uint8_t> state(penumbra.size() * nv, 0);
+    // Fan triangles t and t+1 share the edge v0 v[t+2]: its vertices (a, 0) in t+1 are
+    // (0, a) in t (the same point, computed the same way), so they are traced once.
     auto vidx = [&](size_t t, int a, int b) {
+        if (b == 0 && t > 0)
+            return (t - 1) * per_t + size_t(a) * size_t(g1);
         return t * per_t + size_t(b) * size_t(g1) + size_t(a);
     };
     for (size_t q = 0; q < penumbra.size(); ++q) {
@@ -171,16 +200,47 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
             }
         }
     }
-    auto closed_form = [&](const Cell& c) {
-        const Vec3d tri[3] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
-                              l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
-                              l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
-        const ReceiverPoint& rp = points[penumbra[c.q]];
+    // Per point: the sign that turns the Lambert sum into E (all cells lie in the light's
+    // plane with its winding), and whether the horizon plane cuts the light at all.
+    std::vector<double> sign(penumbra.size());
+    std::vector<uint8_t> cut(penumbra.size());
+    for (size_t q = 0; q < penumbra.size(); ++q) {
+        const ReceiverPoint& rp = points[penumbra[q]];
         const Vec3d x(rp.position), h(rp.horizon);
-        if (Dot(h, h) == 0)
-            return VectorIrradiance(tri, 1.0, x, emission);
-        auto clipped = ClipToHalfSpace(tri, x, h);
-        return clipped.size() >= 3 ? VectorIrradiance(clipped, 1.0, x, emission) : Vec3d{};
+        const double side = Dot(x - l.vertices[0], l.normal);
+        sign[q] = side > 0 ? -0.5 : l.two_sided && side < 0 ? 0.5 : 0.0;
+        cut[q] = 0;
+        for (const auto& v : l.vertices)
+            cut[q] |= Dot(v - x, h) < 0;
+    }
+    auto closed_form = [&](const Cell& c) {
+        Vec3d poly[4] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
+                         l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
+                         l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
+        const ReceiverPoint& rp = points[penumbra[c.q]];
+        const Vec3d x(rp.position);
+        int n = 3;
+        if (cut[c.q]) {
+            const Vec3d h(rp.horizon);
+            double d[3];
+            for (int k = 0; k < 3; ++k)
+                d[k] = Dot(poly[k] - x, h);
+            if (d[0] < 0 || d[1] < 0 || d[2] < 0) {
+                // Sutherland-Hodgman against the horizon: a triangle gives at most four.
+                const Vec3d tri[3] = {poly[0], poly[1], poly[2]};
+                n = 0;
+                for (int k = 0; k < 3; ++k) {
+                    const int k1 = (k + 1) % 3;
+                    if (d[k] >= 0)
+                        poly[n++] = tri[k];
+                    if ((d[k] >= 0) != (d[k1] >= 0))
+                        poly[n++] = tri[k] + (tri[k1] - tri[k]) * (d[k] / (d[k] - d[k1]));
+                }
+                if (n < 3)
+                    return Vec3d{};
+            }
+        }
+        return LambertSum(poly, n, x) * sign[c.q];
     };
     auto origin = [&](uint32_t q) {
         const ReceiverPoint& rp = points[penumbra[q]];
@@ -188,14 +248,47 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     };
     SegmentBatch batch;
     std::vector<std::pair<uint32_t, uint32_t>> asked;  // (point, vertex)
+    // E counts only light above the point's (smooth) horizon, so a grid vertex well below it
+    // (kHorizonMargin) gets no ray, and a cell is uniform when its other corners agree (the
+    // part of it that counts lies on their side). A cell wholly below adds nothing: no rays,
+    // no splitting (where the light sets, half of it can be).
+    auto height = [&](uint32_t q, size_t v) {
+        const ReceiverPoint& rp = points[penumbra[q]];
+        const Vec3d d = l.grid_pos[v] - Vec3d(rp.position);
+        return Dot(d, Vec3d(rp.horizon)) / std::max(Length(d), 1e-30);
+    };
+    auto above = [&](uint32_t q, size_t v) {
+        return !cut[q] || height(q, v) >= -kHorizonMargin;
+    };
+    auto below = [&](const Cell& c) {
+        if (!cut[c.q])
+            return false;
+        for (int k = 0; k < 3; ++k)
+            if (height(c.q, vidx(c.t, c.a[k], c.b[k])) >= 0)
+                return false;
+        return true;
+    };
+    // A cell's corners not well below the horizon: how many are visible and hidden.
+    auto corners = [&](const Cell& c, int* visible, int* hidden) {
+        const uint8_t* st = &state[c.q * nv];
+        *visible = *hidden = 0;
+        for (int k = 0; k < 3; ++k) {
+            const size_t v = vidx(c.t, c.a[k], c.b[k]);
+            if (!above(c.q, v))
+                continue;
+            *visible += st[v] == 2;
+            *hidden += st[v] == 3;
+        }
+    };
     while (!cur.empty()) {
+        cur.erase(std::remove_if(cur.begin(), cur.end(), below), cur.end());
         batch.Clear();
         asked.clear();
         for (const Cell& c : cur) {
             for (int k = 0; k < 3; ++k) {
                 const size_t v = vidx(c.t, c.a[k], c.b[k]);
                 uint8_t& st = state[c.q * nv + v];
-                if (st != 0)
+                if (st != 0 || !above(c.q, v))
                     continue;
                 st = 1;
                 asked.push_back({c.q, uint32_t(v)});
@@ -207,11 +300,10 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
             state[asked[r].first * nv + asked[r].second] = batch.occluded[r] ? 3 : 2;
         next.clear();
         for (const Cell& c : cur) {
-            const uint8_t* st = &state[c.q * nv];
-            const uint8_t s0 = st[vidx(c.t, c.a[0], c.b[0])], s1 = st[vidx(c.t, c.a[1], c.b[1])],
-                          s2 = st[vidx(c.t, c.a[2], c.b[2])];
-            if (s0 == s1 && s1 == s2) {
-                if (s0 == 2)
+            int visible, hidden;
+            corners(c, &visible, &hidden);
+            if (visible == 0 || hidden == 0) {
+                if (hidden == 0)
                     (*e)[c.q] += closed_form(c);
                 continue;
             }
@@ -235,13 +327,56 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
         }
         std::swap(cur, next);
     }
-    // Finest mixed cells: one ray to a fixed point of an R2 low-discrepancy sequence indexed
-    // by the cell, so a shadow edge parallel to cell rows cuts samples at varied offsets.
-    batch.Clear();
+    // Finest cells that a shadow edge crosses (all made by the last level) count as partly
+    // visible without a ray: with one corner visible, the visible part is the corner's
+    // triangle cut off by the edge, s t of the cell for crossings at s and t along its two
+    // sides, 1/4 on average over uniform crossings (two corners: 3/4), with less variance than
+    // one ray (1/9 - 1/16 against 1/4 - 1/9). An edge parallel to a family of cell rows crosses
+    // them all at the same offset, which biases that by up to half a row: where four or more
+    // of a point's mixed cells in a fan triangle lie in one row of a family, each mixed cell
+    // of the point gets one ray to a fixed point of an R2 low-discrepancy sequence indexed by
+    // the cell (a shadow edge parallel to cell rows cuts the samples at varied offsets).
+    struct Span {
+        int lo[3] = {1 << 20, 1 << 20, 1 << 20}, hi[3] = {-1, -1, -1}, count = 0;
+    };
+    std::vector<Span> spans(penumbra.size() * nt);  // per point and fan triangle
+    auto canonical = [](const Cell& c, int* a0, int* b0, bool* down) {
+        *a0 = std::min({c.a[0], c.a[1], c.a[2]});
+        *b0 = std::min({c.b[0], c.b[1], c.b[2]});
+        *down = c.a[0] + c.a[1] + c.a[2] - 3 * *a0 == 2;
+    };
     for (const Cell& c : finest) {
+        int a0, b0;
+        bool down;
+        canonical(c, &a0, &b0, &down);
+        Span& sp = spans[c.q * nt + c.t];
+        const int row[3] = {a0, b0, a0 + b0 + (down ? 1 : 0)};
+        for (int f = 0; f < 3; ++f)
+            sp.lo[f] = std::min(sp.lo[f], row[f]), sp.hi[f] = std::max(sp.hi[f], row[f]);
+        ++sp.count;
+    }
+    std::vector<uint8_t> aligned(spans.size() / std::max<size_t>(nt, 1), 0);
+    for (size_t k = 0; k < spans.size(); ++k) {
+        const Span& sp = spans[k];
+        aligned[k / nt] |=
+            sp.count >= 4 && (sp.hi[0] == sp.lo[0] || sp.hi[1] == sp.lo[1] || sp.hi[2] == sp.lo[2]);
+    }
+    batch.Clear();
+    std::vector<uint32_t> traced;
+    for (uint32_t k = 0; k < finest.size(); ++k) {
+        const Cell& c = finest[k];
+        if (!aligned[c.q]) {
+            int visible, hidden;
+            corners(c, &visible, &hidden);
+            (*e)[c.q] += closed_form(c) * (visible + hidden == 2 ? 0.5
+                                           : visible == 1        ? 0.25
+                                                                 : 0.75);
+            continue;
+        }
         // The cell in canonical form: up (a,b) (a+1,b) (a,b+1) or down (a+1,b) (a+1,b+1) (a,b+1).
-        const int a0 = std::min({c.a[0], c.a[1], c.a[2]}), b0 = std::min({c.b[0], c.b[1], c.b[2]});
-        const bool down = c.a[0] + c.a[1] + c.a[2] - 3 * a0 == 2;
+        int a0, b0;
+        bool down;
+        canonical(c, &a0, &b0, &down);
         const uint64_t id = (uint64_t(c.t) * uint64_t(g) + uint64_t(a0)) * uint64_t(2 * g) +
                             uint64_t(2 * b0 + (down ? 1 : 0));
         double a = std::fmod(0.5 + 0.7548776662466927 * double(id + 1), 1.0);
@@ -252,11 +387,12 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
         const Vec3d& p1 = l.grid_pos[down ? vidx(c.t, a0 + 1, b0 + 1) : vidx(c.t, a0 + 1, b0)];
         const Vec3d& p2 = l.grid_pos[vidx(c.t, a0, b0 + 1)];
         batch.AddSegment(origin(c.q), Vec3f(p0 + (p1 - p0) * a + (p2 - p0) * b));
+        traced.push_back(k);
     }
     batch.Trace(vis_, RayKind::kPenumbra);
-    for (size_t k = 0; k < finest.size(); ++k)
-        if (!batch.occluded[k])
-            (*e)[finest[k].q] += closed_form(finest[k]);
+    for (size_t r = 0; r < traced.size(); ++r)
+        if (!batch.occluded[r])
+            (*e)[finest[traced[r]].q] += closed_form(finest[traced[r]]);
     if (states) {
         for (auto& st : state)
             st = st == 1 ? 0 : st;

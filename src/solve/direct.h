@@ -90,7 +90,8 @@ private:
         // Penumbrae: each fan triangle (v0, v[t+1], v[t+2]) carries a barycentric grid of
         // `grid` cells per side. Cells are refined from a coarse level only where the
         // visibility of their corners disagrees (a shadow edge crosses them); a finest cell
-        // with mixed corners is visible or not as one fixed low-discrepancy point in it is.
+        // with mixed corners counts as 1/4 or 3/4 visible (one or two corners visible), or,
+        // where the edge runs along a row of cells, as one fixed low-discrepancy point in it is.
         int grid = 8;
         std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
         std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)

@@ -58,6 +58,8 @@ struct VisibilityOptions {
     TraceMethod method = TraceMethod::kStream;  // fastest for node-to-node bundles here
     // RTC_INTERSECT_CONTEXT_FLAG_COHERENT for batches of similar rays; used with kStream only
     // (packets ignore it: Embree 3.13.5 can hang in rtcOccluded16 with it, see visibility.cpp).
+    // Not for the solver either: with it, the gen1m M2 solve did not finish in 16 CPU-minutes
+    // (it takes 19 CPU-seconds without), November 2026.
     bool coherent = false;
 };
 
