@@ -47,6 +47,7 @@ struct SolveOptions {
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
     double batch_fraction = 0.05;   // shoot charts with power >= this x the largest
+    size_t emitter_group = 64;      // shooters built and gathered together (memory)
     bool shoot_emission = true;     // emissive materials shoot their emission in batch 0
                                     // (false when they are handled as polygon lights)
 };

@@ -202,7 +202,8 @@ std::vector<Surface> CubeInterior() {
     return faces;
 }
 
-TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
+// emitter_group: shooters built and gathered together (6 charts: one group, or three).
+void CheckClosedCube(size_t emitter_group) {
     TestScene ts;
     const float rho = 0.5f;
     ts.scene.per_input = {{Mat(rho)}};
@@ -219,6 +220,7 @@ TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
     opt.settings.max_bounces = 200;
     opt.settings.stop_fraction = 1e-4;
     opt.settings.tolerance = 0.01;
+    opt.emitter_group = emitter_group;
     Solver solver(ts.scene, ts.charts, ts.vis, opt);
     solver.Run();
     const double flux = std::numbers::pi * 10 * 0.01;
@@ -259,6 +261,14 @@ TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
                 100 * (absorbed + unshot - flux) / flux);
     EXPECT_NEAR(absorbed + unshot, flux, 0.001 * flux)
         << "absorbed " << absorbed << " unshot " << unshot;
+}
+
+TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
+    CheckClosedCube(64);
+}
+
+TEST(Solver, ClosedCubeWithEmittersInGroupsOfTwo) {
+    CheckClosedCube(2);
 }
 
 TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
@@ -334,6 +344,7 @@ TEST(Solver, BitIdenticalForAnyThreadCount) {
         ts.vis.Commit();
         SolveOptions opt;
         opt.settings.max_bounces = 4;
+        opt.emitter_group = 4;  // two groups of shooters per batch
         Solver solver(ts.scene, ts.charts, ts.vis, opt);
         solver.Run();
         std::vector<float> all;
