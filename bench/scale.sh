@@ -75,7 +75,7 @@ sizes = sorted({int(r[0]) for r in rows})
 stages = ["ingest", "solve", "export"]
 t = {(int(r[0]), r[1]): r for r in rows}
 print("## Scale: time and peak RSS against triangles (issue 7)\n")
-print("Machine: %s, %d cores (shared with other jobs; wall times are pessimistic), %.0f GiB, %s." %
+print("Machine: %s, %d cores (whether it was shared: see the notes), %.0f GiB, %s." %
       (cpu, os.cpu_count(), mem, platform.platform()))
 print("Date: %s UTC. Command: `%s`. Input: `mkscan -n N` (noisy sphere) piped into\n"
       "`mebake ingest -`, then `mebake solve` (default rig, M2) and `mebake export --lightmap --stats`.\n"
