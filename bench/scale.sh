@@ -110,7 +110,7 @@ if command -v gnuplot > /dev/null; then
   gnuplot <<GP
 set terminal pngcairo size 1100,480 noenhanced
 set output "$ROOT/bench/scale.png"
-set multiplot layout 1,2 title "mebake scale (mkscan sphere, default rig; shared 2-core machine)"
+set multiplot layout 1,2 title "mebake scale (mkscan sphere, default rig; 2-core machine)"
 set logscale xy
 set grid
 set xlabel "triangles"
