@@ -22,7 +22,7 @@ CASES="plane furnace cornell cornell-tiny bunny igea bunny-2lights igea-2lights"
 REF_TIME=300
 WORK="$ROOT/build/bench-accuracy"
 RESULTS=1
-CMD="bash bench/accuracy.sh $*"
+CMD="bash bench/accuracy.sh$(printf " %q" "$@")"
 while [ $# -gt 0 ]; do
   case "$1" in
     --points) POINTS="$2"; shift 2 ;;

@@ -23,7 +23,7 @@ TOLS="0.05 0.02"
 POINTS=2000
 WORK="$ROOT/build/bench-peer"
 RESULTS=1
-CMD="bash bench/peer-blender.sh $*"
+CMD="bash bench/peer-blender.sh$(printf " %q" "$@")"
 while [ $# -gt 0 ]; do
   case "$1" in
     --tris) TRIS="$2"; shift 2 ;;

@@ -18,7 +18,7 @@ SIZES="100000 1000000 4000000 16000000"
 WORK="$ROOT/build/bench-scale"
 RESULTS=1
 TIMEOUT=1200
-CMD="bash bench/scale.sh $*"
+CMD="bash bench/scale.sh$(printf " %q" "$@")"
 while [ $# -gt 0 ]; do
   case "$1" in
     --sizes) SIZES="$2"; shift 2 ;;

@@ -26,23 +26,6 @@ Vec3d PolygonPoint(const std::vector<Vec3d>& v, size_t tri, double a, double b) 
     return v[0] + (v[tri + 1] - v[0]) * a + (v[tri + 2] - v[0]) * b;
 }
 
-// Lambert's boundary sum over a planar polygon seen from x, sum_k theta_k unit(a_k x e_k)
-// (as in polygon_light.cpp); E = -L/2 times it in front of a counter-clockwise polygon.
-Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
-    Vec3d sum;
-    for (int k = 0; k < nv; ++k) {
-        const Vec3d& p = v[k];
-        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
-        const Vec3d a = p - x, b = q - x;
-        const Vec3d c = Cross(a, q - p);
-        const double len = Length(c);
-        if (!(len > 0))
-            continue;
-        sum += c * (std::atan2(len, Dot(a, b)) / len);
-    }
-    return sum;
-}
-
 // Orthonormal frame with n as z (Duff et al. 2017).
 void Frame(const Vec3f& n, Vec3f* t, Vec3f* b) {
     float sign = std::copysign(1.0f, n.z);

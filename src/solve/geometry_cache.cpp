@@ -3,15 +3,14 @@
 #include "core/check.h"
 #include "core/error.h"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <utility>
 
 namespace mebake::solve {
@@ -60,43 +59,7 @@ GeometryPin GeometryPyramid::Pin() const {
 }
 
 stream::SurfaceSample SampleBilinear(const GeometryPyramid& img, int level, float u, float v) {
-    // A copy of stream::SampleBilinear (geometry_image.cpp) on a view; keep them in step.
-    level = std::min(std::max(level, 1), img.finest_level());
-    const int nn = 1 << level;
-    const float x = u * float(nn) - 0.5f, y = v * float(nn) - 0.5f;
-    const int i0 = nn > 1 ? std::clamp(int(std::floor(x)), 0, nn - 2) : 0;
-    const int j0 = nn > 1 ? std::clamp(int(std::floor(y)), 0, nn - 2) : 0;
-    const int i1 = std::min(i0 + 1, nn - 1), j1 = std::min(j0 + 1, nn - 1);
-    const float fx = nn > 1 ? x - float(i0) : 0.f, fy = nn > 1 ? y - float(j0) : 0.f;
-    const stream::GeometryTexel* t[4] = {
-        &img.At(level, uint32_t(i0), uint32_t(j0)), &img.At(level, uint32_t(i1), uint32_t(j0)),
-        &img.At(level, uint32_t(i0), uint32_t(j1)), &img.At(level, uint32_t(i1), uint32_t(j1))};
-    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-    stream::SurfaceSample s{};
-    Vec3f nrm{};
-    float col_w = 0;
-    int best = 0;
-    const float dx = std::clamp(x, 0.f, float(nn - 1)) - float(i0);
-    const float dy = std::clamp(y, 0.f, float(nn - 1)) - float(j0);
-    best = (dx >= 0.5f ? 1 : 0) + (dy >= 0.5f ? 2 : 0);
-    for (int k = 0; k < 4; ++k) {
-        s.position += t[k]->position * w[k];
-        nrm += t[k]->normal * w[k];
-        s.coverage += t[k]->coverage * w[k];
-        if (t[k]->color.x >= 0) {
-            s.color += t[k]->color * w[k];
-            col_w += w[k];
-        }
-    }
-    s.coverage = std::clamp(s.coverage, 0.f, 1.f);
-    s.normal = Length(nrm) > 0 ? Normalize(nrm) : t[best]->normal;
-    s.color = col_w > 0 ? Vec3f(std::clamp(s.color.x / col_w, 0.f, 1.f),
-                                std::clamp(s.color.y / col_w, 0.f, 1.f),
-                                std::clamp(s.color.z / col_w, 0.f, 1.f))
-                        : Vec3f(-1, -1, -1);
-    s.material = t[best]->material;
-    s.vis_point = t[best]->coverage >= 0.999f ? s.position : t[best]->vis_point;
-    return s;
+    return stream::SampleBilinearOf(img, level, u, v);
 }
 
 GeometryCache::GeometryCache(const std::string& dir, uint64_t budget_bytes)

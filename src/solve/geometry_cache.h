@@ -69,7 +69,7 @@ private:
     uint32_t chart_ = 0;
 };
 
-// stream::SampleBilinear on a view: the same arithmetic, so the same bits.
+// stream::SampleBilinear on a view (both are stream::SampleBilinearOf: the same bits).
 stream::SurfaceSample SampleBilinear(const GeometryPyramid& img, int level, float u, float v);
 
 class GeometryCache {

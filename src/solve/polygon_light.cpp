@@ -8,11 +8,7 @@
 #include <cmath>
 
 namespace mebake::solve {
-namespace {
 
-// sum_k theta_k * unit(a_k x e_k), a_k = v_k - x, e_k = v_k+1 - v_k. a x e equals
-// (v_k - x) x (v_k+1 - x) but loses less to cancellation when x is far from the edge.
-// For a polygon wound counter-clockwise seen from x this sum points away from the polygon.
 Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
     Vec3d sum;
     for (int k = 0; k < nv; ++k) {
@@ -30,6 +26,8 @@ Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
     }
     return sum;
 }
+
+namespace {
 
 // Signed side of x: +1 in front, -1 behind, 0 on the plane (relative tolerance) or degenerate.
 int Side(std::span<const Vec3d> polygon, const Vec3d& normal, const Vec3d& x) {

@@ -30,6 +30,13 @@ enum class Emission {
     kBoth,   // emits to both sides (a double-sided light panel)
 };
 
+// Lambert's boundary sum over the closed polygon v[0..nv) seen from x:
+// sum_k theta_k * unit(a_k x e_k), a_k = v_k - x, e_k = v_k+1 - v_k (a x e equals
+// (v_k - x) x (v_k+1 - x) but loses less to cancellation when x is far from the edge).
+// For a polygon wound counter-clockwise seen from x it points away from the polygon;
+// the vector irradiance of a uniform polygon is -L/2 times it.
+Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x);
+
 // Unit front normal (Newell's method, robust for non-convex polygons); zero if degenerate.
 Vec3d PolygonNormal(std::span<const Vec3d> polygon);
 double PolygonArea(std::span<const Vec3d> polygon);

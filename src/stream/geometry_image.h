@@ -7,22 +7,24 @@
 // triangles, which is what makes its cost follow the lighting, not the polygon count.
 #pragma once
 
+#include "core/vec.h"
+
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 
 struct GeometryTexel {
-    Vec3f position;    // surface point at the texel centre (extrapolated if virtual)
-    Vec3f normal;      // unit normal there
-    Vec3f vis_point;   // nearest real surface point: where visibility is evaluated
-    Vec3f color;       // vertex colour (linear RGB), or (-1, -1, -1) when none
-    float area;        // real 3D surface area inside the texel
-    float coverage;    // real fraction of the texel's square, 0..1
-    float radius;      // bound on |p - position| for real points p in the texel
-    uint32_t material; // packed scene material id (input << 16 | local)
+    Vec3f position;     // surface point at the texel centre (extrapolated if virtual)
+    Vec3f normal;       // unit normal there
+    Vec3f vis_point;    // nearest real surface point: where visibility is evaluated
+    Vec3f color;        // vertex colour (linear RGB), or (-1, -1, -1) when none
+    float area;         // real 3D surface area inside the texel
+    float coverage;     // real fraction of the texel's square, 0..1
+    float radius;       // bound on |p - position| for real points p in the texel
+    uint32_t material;  // packed scene material id (input << 16 | local)
 };
 static_assert(sizeof(GeometryTexel) == 64);
 
@@ -46,5 +48,52 @@ struct SurfaceSample {
     float coverage;
 };
 SurfaceSample SampleBilinear(const GeometryImage& img, int level, float u, float v);
+
+// The same on any pyramid with At(level, i, j) and finest_level() (the solver's memory-
+// mapped view, solve/geometry_cache.h): one definition, so both give the same bits.
+template <typename Pyramid>
+SurfaceSample SampleBilinearOf(const Pyramid& img, int level, float u, float v) {
+    // Texel centres are the samples; outside the outermost centres the image is
+    // extrapolated linearly (clamping would move border points by half a texel).
+    level = std::min(std::max(level, 1), img.finest_level());
+    const int nn = 1 << level;
+    const float x = u * float(nn) - 0.5f, y = v * float(nn) - 0.5f;
+    const int i0 = nn > 1 ? std::clamp(int(std::floor(x)), 0, nn - 2) : 0;
+    const int j0 = nn > 1 ? std::clamp(int(std::floor(y)), 0, nn - 2) : 0;
+    const int i1 = std::min(i0 + 1, nn - 1), j1 = std::min(j0 + 1, nn - 1);
+    const float fx = nn > 1 ? x - float(i0) : 0.f, fy = nn > 1 ? y - float(j0) : 0.f;
+    const GeometryTexel* t[4] = {
+        &img.At(level, uint32_t(i0), uint32_t(j0)), &img.At(level, uint32_t(i1), uint32_t(j0)),
+        &img.At(level, uint32_t(i0), uint32_t(j1)), &img.At(level, uint32_t(i1), uint32_t(j1))};
+    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    SurfaceSample s{};
+    Vec3f nrm{};
+    float col_w = 0;
+    int best = 0;
+    // The nearest texel decides discrete attributes and the visibility point.
+    const float dx = std::clamp(x, 0.f, float(nn - 1)) - float(i0);
+    const float dy = std::clamp(y, 0.f, float(nn - 1)) - float(j0);
+    best = (dx >= 0.5f ? 1 : 0) + (dy >= 0.5f ? 2 : 0);
+    for (int k = 0; k < 4; ++k) {
+        s.position += t[k]->position * w[k];
+        nrm += t[k]->normal * w[k];
+        s.coverage += t[k]->coverage * w[k];
+        if (t[k]->color.x >= 0) {
+            s.color += t[k]->color * w[k];
+            col_w += w[k];
+        }
+    }
+    s.coverage = std::clamp(s.coverage, 0.f, 1.f);
+    s.normal = Length(nrm) > 0 ? Normalize(nrm) : t[best]->normal;
+    s.color = col_w > 0 ? Vec3f(std::clamp(s.color.x / col_w, 0.f, 1.f),
+                                std::clamp(s.color.y / col_w, 0.f, 1.f),
+                                std::clamp(s.color.z / col_w, 0.f, 1.f))
+                        : Vec3f(-1, -1, -1);
+    s.material = t[best]->material;
+    // Visibility is taken at the sample itself where the surface is real, else at the
+    // nearest texel's real point (the seed's x' rule).
+    s.vis_point = t[best]->coverage >= 0.999f ? s.position : t[best]->vis_point;
+    return s;
+}
 
 }  // namespace mebake::stream
