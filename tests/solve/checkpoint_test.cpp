@@ -21,41 +21,10 @@ namespace mebake::solve {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::Surface;
 
-// An open box (five faces of the unit cube seen from inside) lit by a small square light
-// below its ceiling: several bounces of interreflection.
-struct Box {
-    Scene scene;
-    std::vector<SolveChart> charts;
-    VisibilityScene vis;
-
-    Box() {
-        Material m;
-        m.albedo = Vec3f(0.7f, 0.6f, 0.5f);
-        m.use_vertex_colors = false;
-        scene.per_input = {{m}};
-        PolygonLight light;
-        light.vertices = {{0.4, 0.95, 0.4}, {0.6, 0.95, 0.4}, {0.6, 0.95, 0.6}, {0.4, 0.95, 0.6}};
-        light.radiance = {5, 4, 3};
-        scene.lights.push_back(light);
-        const Surface faces[] = {
-            [](double u, double v) { return Vec3d(u, 0, 1 - v); },  // floor, normal +y
-            [](double u, double v) { return Vec3d(u, v, 0); },      // back wall, +z
-            [](double u, double v) { return Vec3d(0, u, v); },      // left wall, +x
-            [](double u, double v) { return Vec3d(1, v, u); },      // right wall, -x
-            [](double u, double v) { return Vec3d(v, 1, u); },      // ceiling, -y
-        };
-        for (const auto& f : faces)
-            Add(f, 16);
-        vis.Commit();
-    }
-
-    void Add(const Surface& f, int res) {
-        testing::Patch p = testing::MakePatch(f, res, 0, 1);
-        charts.push_back(std::move(p.chart));
-        vis.AddTriangles(p.xyz, p.tris, "box");
-    }
+// The open box of patch_fixture.h, five faces: several bounces of interreflection.
+struct Box : testing::LitBox {
+    Box() : LitBox(5, 16) {}
 };
 
 SolveOptions Options() {

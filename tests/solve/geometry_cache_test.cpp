@@ -147,36 +147,18 @@ TEST(GeometryCache, EvictionLeavesResidentMemory) {
 }
 
 // Two facing walls and a floor under a square light: direct light and a few bounces.
-struct Room {
-    Scene scene;
+// Three faces of patch_fixture.h's lit box, with a stream::GeometryImage copy of each
+// chart's pyramid to add to a cache.
+struct Room : testing::LitBox {
     std::vector<stream::GeometryImage> images;
-    std::vector<SolveChart> charts;
-    VisibilityScene vis;
-    Room() {
-        Material m;
-        m.albedo = Vec3f(0.7f, 0.6f, 0.5f);
-        m.use_vertex_colors = false;
-        scene.per_input = {{m}};
-        PolygonLight light;
-        light.vertices = {{0.4, 0.95, 0.4}, {0.6, 0.95, 0.4}, {0.6, 0.95, 0.6}, {0.4, 0.95, 0.6}};
-        light.radiance = {5, 4, 3};
-        scene.lights.push_back(light);
-        const testing::Surface faces[] = {
-            [](double u, double v) { return Vec3d(u, 0, 1 - v); },
-            [](double u, double v) { return Vec3d(u, v, 0); },
-            [](double u, double v) { return Vec3d(0, u, v); },
-        };
-        for (const auto& f : faces) {
-            testing::Patch p = testing::MakePatch(f, 32, 0, 1);
+    Room() : LitBox(3, 32) {
+        for (const SolveChart& c : charts) {
             stream::GeometryImage img;
-            img.resolution = p.chart.geometry.resolution;
-            for (const auto& level : p.chart.geometry.levels)
+            img.resolution = c.geometry.resolution;
+            for (const auto& level : c.geometry.levels)
                 img.levels.emplace_back(level.begin(), level.end());
             images.push_back(std::move(img));
-            charts.push_back(p.chart);
-            vis.AddTriangles(p.xyz, p.tris, "room");
         }
-        vis.Commit();
     }
 };
 

@@ -3,7 +3,10 @@
 // and as the triangles of its (res+1)^2 corner grid for visibility.
 #pragma once
 
+#include "solve/polygon_light.h"
+#include "solve/scene.h"
 #include "solve/solver.h"
+#include "solve/visibility.h"
 
 #include <functional>
 #include <vector>
@@ -62,5 +65,38 @@ inline Patch MakePatch(const Surface& f, int res, uint32_t material, double scal
         }
     return p;
 }
+
+// An open box seen from inside (the first `faces` of: floor, back wall, left wall, right
+// wall, ceiling of the unit cube; 1..5) lit by a small square light below its ceiling,
+// charts `res` texels wide: several bounces of coloured interreflection.
+struct LitBox {
+    Scene scene;
+    std::vector<SolveChart> charts;
+    VisibilityScene vis;
+
+    LitBox(int faces, int res) {
+        Material m;
+        m.albedo = Vec3f(0.7f, 0.6f, 0.5f);
+        m.use_vertex_colors = false;
+        scene.per_input = {{m}};
+        PolygonLight light;
+        light.vertices = {{0.4, 0.95, 0.4}, {0.6, 0.95, 0.4}, {0.6, 0.95, 0.6}, {0.4, 0.95, 0.6}};
+        light.radiance = {5, 4, 3};
+        scene.lights.push_back(light);
+        const Surface all[] = {
+            [](double u, double v) { return Vec3d(u, 0, 1 - v); },  // floor, normal +y
+            [](double u, double v) { return Vec3d(u, v, 0); },      // back wall, +z
+            [](double u, double v) { return Vec3d(0, u, v); },      // left wall, +x
+            [](double u, double v) { return Vec3d(1, v, u); },      // right wall, -x
+            [](double u, double v) { return Vec3d(v, 1, u); },      // ceiling, -y
+        };
+        for (int k = 0; k < faces && k < 5; ++k) {
+            Patch p = MakePatch(all[k], res, 0, 1);
+            charts.push_back(std::move(p.chart));
+            vis.AddTriangles(p.xyz, p.tris, "box");
+        }
+        vis.Commit();
+    }
+};
 
 }  // namespace mebake::solve::testing
