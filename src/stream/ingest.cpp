@@ -73,19 +73,26 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
     const uint64_t full_budget = FullMeshTriangleBudget(m->memory_budget);
     const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(m->memory_budget), 1);
     const double diag = Length(m->bbox_max - m->bbox_min);
+    // One brick's part of the full repaired mesh, as pass 3 spilled it (empty if none).
+    auto source = [&](uint32_t b) {
+        ProxyMesh part;
+        if (!fs::exists(BrickProxyPath(dir, b)))
+            return part;
+        io::ChunkReader r(BrickProxyPath(dir, b), io::Tag("PRXP"), 1, 1);
+        part.positions = r.ReadArray<Vec3f>(io::Tag("PPOS"));
+        part.triangles = r.ReadArray<uint32_t>(io::Tag("PTRI"));
+        return part;
+    };
     io::ChunkWriter w(ProxyPath(dir), io::Tag("PRXY"), 1);
     if (total <= full_budget) {
         uint64_t tris = 0;
         for (uint32_t b = 0; b < bricks; ++b) {
-            std::string part = BrickProxyPath(dir, b);
-            if (!fs::exists(part))
+            const ProxyMesh part = source(b);
+            if (part.triangles.empty())
                 continue;
-            io::ChunkReader r(part, io::Tag("PRXP"), 1, 1);
-            auto pos = r.Read(io::Tag("PPOS"));
-            auto tri = r.Read(io::Tag("PTRI"));
-            tris += tri.size() / 12;
-            w.Add(io::Tag("PPOS"), b, pos);
-            w.Add(io::Tag("PTRI"), b, tri);
+            tris += part.triangles.size() / 3;
+            w.AddArray(io::Tag("PPOS"), b, part.positions);
+            w.AddArray(io::Tag("PTRI"), b, part.triangles);
         }
         w.Finish();
         m->proxy_triangles = tris;
@@ -95,16 +102,6 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
                      FormatCount(double(full_budget)));
         return;
     }
-    auto source = [&](uint32_t b) {
-        ProxyMesh part;
-        std::string path = BrickProxyPath(dir, b);
-        if (!fs::exists(path))
-            return part;
-        io::ChunkReader r(path, io::Tag("PRXP"), 1, 1);
-        part.positions = r.ReadArray<Vec3f>(io::Tag("PPOS"));
-        part.triangles = r.ReadArray<uint32_t>(io::Tag("PTRI"));
-        return part;
-    };
     ClusterOptions co;
     co.max_triangles = budget;
     co.surface_area = m->surface_area;
