@@ -38,17 +38,8 @@ void Frame(const Vec3f& n, Vec3f* t, Vec3f* b) {
 }  // namespace
 
 std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, const Vec3d& n) {
-    std::vector<Vec3d> out;
-    const size_t m = poly.size();
-    for (size_t k = 0; k < m; ++k) {
-        const Vec3d& a = poly[k];
-        const Vec3d& b = poly[(k + 1) % m];
-        double da = Dot(a - x, n), db = Dot(b - x, n);
-        if (da >= 0)
-            out.push_back(a);
-        if ((da >= 0) != (db >= 0))
-            out.push_back(a + (b - a) * (da / (da - db)));
-    }
+    std::vector<Vec3d> out(2 * poly.size());
+    out.resize(size_t(ClipToHalfSpace(poly.data(), int(poly.size()), x, n, out.data())));
     return out;
 }
 
@@ -197,32 +188,17 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
             cut[q] |= Dot(v - x, h) < 0;
     }
     auto closed_form = [&](const Cell& c) {
-        Vec3d poly[4] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
-                         l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
-                         l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
+        const Vec3d tri[3] = {l.grid_pos[vidx(c.t, c.a[0], c.b[0])],
+                              l.grid_pos[vidx(c.t, c.a[1], c.b[1])],
+                              l.grid_pos[vidx(c.t, c.a[2], c.b[2])]};
         const ReceiverPoint& rp = points[penumbra[c.q]];
         const Vec3d x(rp.position);
-        int n = 3;
-        if (cut[c.q]) {
-            const Vec3d h(rp.horizon);
-            double d[3];
-            for (int k = 0; k < 3; ++k)
-                d[k] = Dot(poly[k] - x, h);
-            if (d[0] < 0 || d[1] < 0 || d[2] < 0) {
-                // Sutherland-Hodgman against the horizon: a triangle gives at most four.
-                const Vec3d tri[3] = {poly[0], poly[1], poly[2]};
-                n = 0;
-                for (int k = 0; k < 3; ++k) {
-                    const int k1 = (k + 1) % 3;
-                    if (d[k] >= 0)
-                        poly[n++] = tri[k];
-                    if ((d[k] >= 0) != (d[k1] >= 0))
-                        poly[n++] = tri[k] + (tri[k1] - tri[k]) * (d[k] / (d[k] - d[k1]));
-                }
-                if (n < 3)
-                    return Vec3d{};
-            }
-        }
+        if (!cut[c.q])
+            return LambertSum(tri, 3, x) * sign[c.q];
+        Vec3d poly[6];
+        const int n = ClipToHalfSpace(tri, 3, x, Vec3d(rp.horizon), poly);
+        if (n < 3)
+            return Vec3d{};
         return LambertSum(poly, n, x) * sign[c.q];
     };
     auto origin = [&](uint32_t q) {

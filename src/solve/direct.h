@@ -110,7 +110,7 @@ private:
     float offset_, far_;
 };
 
-// Clips a polygon to the half-space (y - x).n >= 0 (Sutherland-Hodgman).
+// ClipToHalfSpace of polygon_light.h, returning the clipped polygon.
 std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, const Vec3d& n);
 
 }  // namespace mebake::solve

@@ -27,6 +27,20 @@ Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
     return sum;
 }
 
+int ClipToHalfSpace(const Vec3d* v, int nv, const Vec3d& x, const Vec3d& n, Vec3d* out) {
+    int nc = 0;
+    for (int k = 0; k < nv; ++k) {
+        const Vec3d& p = v[k];
+        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
+        const double dp = Dot(p - x, n), dq = Dot(q - x, n);
+        if (dp >= 0)
+            out[nc++] = p;
+        if ((dp >= 0) != (dq >= 0))
+            out[nc++] = p + (q - p) * (dp / (dp - dq));
+    }
+    return nc;
+}
+
 namespace {
 
 // Signed side of x: +1 in front, -1 behind, 0 on the plane (relative tolerance) or degenerate.
@@ -102,23 +116,8 @@ double IrradianceClipped(std::span<const Vec3d> polygon, double radiance, const 
     const double sign = Orientation(Side(polygon, normal, x), emission);
     if (sign == 0)
         return 0;
-    // Sutherland-Hodgman against {y : (y-x).n >= 0}: each edge emits at most two vertices. A
-    // non-convex polygon may come out with zero-area bridges, which the boundary integral
-    // (Lambert's formula is one) cancels exactly.
     Vec3d clipped[2 * kMaxPolygonVertices];
-    int nc = 0;
-    const int nv = int(polygon.size());
-    for (int k = 0; k < nv; ++k) {
-        const Vec3d& p = polygon[k];
-        const Vec3d& q = polygon[k + 1 == nv ? 0 : k + 1];
-        const double dp = Dot(p - x, n), dq = Dot(q - x, n);
-        if (dp >= 0)
-            clipped[nc++] = p;
-        if ((dp >= 0) != (dq >= 0)) {
-            const double t = dp / (dp - dq);
-            clipped[nc++] = p + (q - p) * t;
-        }
-    }
+    const int nc = ClipToHalfSpace(polygon.data(), int(polygon.size()), x, n, clipped);
     if (nc < 3)
         return 0;
     const double e = Dot(n, LambertSum(clipped, nc, x)) * (sign * 0.5 * radiance);

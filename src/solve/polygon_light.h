@@ -37,6 +37,12 @@ enum class Emission {
 // the vector irradiance of a uniform polygon is -L/2 times it.
 Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x);
 
+// Sutherland-Hodgman: the part of polygon v[0..nv) in {y : (y - x).n >= 0}, written to
+// out (room for 2 nv vertices: each edge emits at most two); returns its vertex count. A
+// non-convex polygon may come out with zero-area bridges, which boundary integrals (as
+// Lambert's formula) cancel exactly.
+int ClipToHalfSpace(const Vec3d* v, int nv, const Vec3d& x, const Vec3d& n, Vec3d* out);
+
 // Unit front normal (Newell's method, robust for non-convex polygons); zero if degenerate.
 Vec3d PolygonNormal(std::span<const Vec3d> polygon);
 double PolygonArea(std::span<const Vec3d> polygon);
