@@ -24,6 +24,8 @@ function(mebake_test name)
   cmake_parse_arguments(T "" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  # Helpers shared by several test folders live in tests/support/ ("support/x.h").
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_compile_definitions(${name} PRIVATE
     MEBAKE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     MEBAKE_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data"

@@ -36,7 +36,7 @@ fi
 ctest --test-dir build -j"$jobs" --output-on-failure --timeout 900
 
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-  -DMEBAKE_SANITIZE=ON -DMEBAKE_FUZZ=ON -DMEBAKE_BENCH=OFF -DMEBAKE_TEST_MODULES="core;io;stream;solve"
+  -DMEBAKE_SANITIZE=ON -DMEBAKE_FUZZ=ON -DMEBAKE_BENCH=OFF -DMEBAKE_TEST_MODULES="core;io;stream;solve;output;reference"
 cmake --build build-asan -j"$jobs" --target sanitize_set
 # Real-data tests and the long convergence and thread-count tests take minutes each in a
 # Debug sanitizer build (40 min together); they ran above in the Release build.

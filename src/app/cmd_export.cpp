@@ -5,14 +5,14 @@
 #include "core/parallel.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
-#include "solve/atlas.h"
-#include "solve/bake_view.h"
-#include "solve/export_mesh.h"
-#include "solve/lightmap.h"
-#include "solve/render.h"
-#include "solve/seams.h"
-#include "solve/tonemap.h"
-#include "solve/vertex_colors.h"
+#include "output/atlas.h"
+#include "output/bake_view.h"
+#include "output/export_mesh.h"
+#include "output/lightmap.h"
+#include "output/render.h"
+#include "output/seams.h"
+#include "output/tonemap.h"
+#include "output/vertex_colors.h"
 
 #include <chrono>
 #include <cmath>
@@ -39,11 +39,11 @@ void CheckFresh(const std::string& path, bool force) {
         UsageError("{} exists; use --force to overwrite it", path);
 }
 
-solve::ToneMap ParseTone(double exposure, const std::string& curve) {
-    auto c = solve::ParseToneCurve(curve);
+output::ToneMap ParseTone(double exposure, const std::string& curve) {
+    auto c = output::ParseToneCurve(curve);
     if (!c)
         UsageError("--tonemap '{}': expected filmic, reinhard or clamp", curve);
-    return solve::ToneMap{float(exposure), *c};
+    return output::ToneMap{float(exposure), *c};
 }
 
 io::ExrCompression ParseCompression(const std::string& s) {
@@ -88,25 +88,25 @@ int RunExport(const ExportCommand& c) {
                    "or --stats");
     if (to_stdout > 1)
         UsageError("only one output can go to stdout ('-')");
-    const solve::ToneMap tone = ParseTone(c.exposure, c.tonemap);
-    solve::MapWriteOptions mo;
+    const output::ToneMap tone = ParseTone(c.exposure, c.tonemap);
+    output::MapWriteOptions mo;
     mo.exr_type = c.float_output ? io::ExrPixelType::Float : io::ExrPixelType::Half;
     mo.compression = ParseCompression(c.compression);
     mo.tone = tone;
 
     // Fields are read a chart at a time: memory follows the charts being written.
-    solve::BakeView view = solve::OpenBakeView(c.dir, solve::FieldLoading::OnDemand);
-    solve::AtlasOptions ao;
+    output::BakeView view = output::OpenBakeView(c.dir, output::FieldLoading::OnDemand);
+    output::AtlasOptions ao;
     ao.max_size = c.max_atlas;
     ao.gutter = c.gutter;
     ao.power_of_two = !c.npot;
-    const solve::Atlas atlas = solve::PackAtlas(solve::ChartResolutions(view), ao);
+    const output::Atlas atlas = output::PackAtlas(output::ChartResolutions(view), ao);
     const uint32_t pages = uint32_t(atlas.pages.size());
     for (uint32_t p = 0; p < pages; ++p) {
         if (!c.lightmap.empty())
-            CheckFresh(solve::PagePath(c.lightmap, p, pages), c.force);
+            CheckFresh(output::PagePath(c.lightmap, p, pages), c.force);
         if (!c.irradiance.empty())
-            CheckFresh(solve::PagePath(c.irradiance, p, pages), c.force);
+            CheckFresh(output::PagePath(c.irradiance, p, pages), c.force);
     }
     for (const auto& o : {c.mesh, c.vertex_colors, c.stats})
         CheckFresh(o, c.force);
@@ -130,7 +130,7 @@ int RunExport(const ExportCommand& c) {
     if (!c.lightmap.empty()) {
         auto t = Clock::now();
         auto files =
-            solve::WriteMapPages(view, atlas, c.lightmap, solve::MapContent::Radiosity, mo);
+            output::WriteMapPages(view, atlas, c.lightmap, output::MapContent::Radiosity, mo);
         seconds["lightmap"] = Since(t);
         j["lightmap"] = files;
         spdlog::info("light map: {} ({})", fmt::join(files, ", "), FormatSeconds(Since(t)));
@@ -138,17 +138,17 @@ int RunExport(const ExportCommand& c) {
     if (!c.irradiance.empty()) {
         auto t = Clock::now();
         auto files =
-            solve::WriteMapPages(view, atlas, c.irradiance, solve::MapContent::Irradiance, mo);
+            output::WriteMapPages(view, atlas, c.irradiance, output::MapContent::Irradiance, mo);
         seconds["irradiance"] = Since(t);
         j["irradiance"] = files;
         spdlog::info("vector irradiance: {} ({})", fmt::join(files, ", "), FormatSeconds(Since(t)));
     }
     if (!c.mesh.empty()) {
         auto t = Clock::now();
-        solve::MeshExportOptions me;
+        output::MeshExportOptions me;
         me.glb_mode = c.unlit ? io::GlbLightMapMode::Unlit : io::GlbLightMapMode::Emissive;
         me.tone = tone;
-        auto st = solve::WriteBakedMesh(view, atlas, c.mesh, me);
+        auto st = output::WriteBakedMesh(view, atlas, c.mesh, me);
         seconds["mesh"] = Since(t);
         j["mesh"] = {{"path", c.mesh}, {"vertices", st.vertices}, {"triangles", st.triangles}};
         spdlog::info("mesh: {} ({} vertices, {} triangles, {})", c.mesh,
@@ -157,10 +157,10 @@ int RunExport(const ExportCommand& c) {
     }
     if (!c.vertex_colors.empty()) {
         auto t = Clock::now();
-        solve::VertexColorOptions vo;
+        output::VertexColorOptions vo;
         vo.tone = tone;
         vo.float_colors = c.float_output;
-        auto st = solve::WriteVertexColors(view, c.vertex_colors, vo);
+        auto st = output::WriteVertexColors(view, c.vertex_colors, vo);
         seconds["vertex_colors"] = Since(t);
         j["vertex_colors"] = {
             {"path", c.vertex_colors},     {"vertices", st.vertices},
@@ -172,7 +172,7 @@ int RunExport(const ExportCommand& c) {
     }
     if (!c.stats.empty()) {
         auto t = Clock::now();
-        const solve::SeamStats s = solve::MeasureSeams(view);
+        const output::SeamStats s = output::MeasureSeams(view);
         seconds["seams"] = Since(t);
         j["seams"] = {{"edges", s.seam_edges},
                       {"open_edges", s.open_edges},
@@ -206,11 +206,11 @@ int RunRender(const RenderCommand& c) {
             (x != 'x' && x != 'X'))
             UsageError("--size '{}': expected WIDTHxHEIGHT, e.g. 800x600", c.size);
     }
-    const solve::ToneMap tone = ParseTone(c.exposure, c.tonemap);
+    const output::ToneMap tone = ParseTone(c.exposure, c.tonemap);
     CheckFresh(c.output, c.force);
-    solve::BakeView view = solve::OpenBakeView(c.dir);
-    solve::RenderOptions ro;
-    ro.camera = solve::DefaultCamera(view, w, h, c.fov);
+    output::BakeView view = output::OpenBakeView(c.dir);
+    output::RenderOptions ro;
+    ro.camera = output::DefaultCamera(view, w, h, c.fov);
     if (!c.eye.empty())
         ro.camera.eye = ToVec3(c.eye, "--eye");
     if (!c.target.empty())
@@ -221,8 +221,8 @@ int RunRender(const RenderCommand& c) {
     ro.samples = c.samples;
     if (!c.background.empty())
         ro.background = Vec3f(ToVec3(c.background, "--background"));
-    const solve::RenderedImage img = solve::Render(view, ro);
-    solve::WriteRenderedImage(img, c.output, tone,
+    const output::RenderedImage img = output::Render(view, ro);
+    output::WriteRenderedImage(img, c.output, tone,
                               c.float_output ? io::ExrPixelType::Float : io::ExrPixelType::Half);
     const Vec3d& e = ro.camera.eye;
     spdlog::info("rendered {}x{} from ({:.4g}, {:.4g}, {:.4g}): {} rays, {:.1f}% hit, {}", w, h,

@@ -1,13 +1,13 @@
-// `mebake reference`: path-traced B and E at random surface points (solve/reference.h), and
-// `mebake compare`: the solved bake at the same points (solve/probe.h) scored against them.
+// `mebake reference`: path-traced B and E at random surface points (reference/reference.h), and
+// `mebake compare`: the solved bake at the same points (output/probe.h) scored against them.
 #include "app/reference_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/units.h"
-#include "solve/bake_view.h"
-#include "solve/probe.h"
-#include "solve/reference.h"
+#include "output/bake_view.h"
+#include "output/probe.h"
+#include "reference/reference.h"
 #include "solve/solution.h"
 #include "stream/trimesh.h"
 
@@ -50,7 +50,7 @@ void WriteJson(const json& j, const std::string& path) {
     fs::rename(tmp, path);
 }
 
-json ErrorJson(const solve::ProbeError& e) {
+json ErrorJson(const output::ProbeError& e) {
     return {{"points", e.points},
             {"relative_rms", e.relative_rms},
             {"relative_max", e.relative_max},
@@ -73,14 +73,14 @@ Vec3d ReadVec3(const json& j, const std::string& file, size_t i, const char* key
     return v;
 }
 
-solve::ProbeError Score(const solve::BakeView& view, const std::vector<solve::ProbeSite>& sites,
+output::ProbeError Score(const output::BakeView& view, const std::vector<output::ProbeSite>& sites,
                         const std::vector<Vec3d>& ref, const std::vector<Vec3d>& se,
-                        std::vector<solve::ProbeValue>& values) {
-    values = solve::ProbeSolution(view, sites);
+                        std::vector<output::ProbeValue>& values) {
+    values = output::ProbeSolution(view, sites);
     std::vector<Vec3d> bake(values.size());
     for (size_t i = 0; i < values.size(); ++i)
         bake[i] = Vec3d(values[i].b);
-    return solve::CompareRadiosity(ref, se, bake);
+    return output::CompareRadiosity(ref, se, bake);
 }
 
 }  // namespace
@@ -98,19 +98,19 @@ int RunReference(const ReferenceCommand& c) {
     const solve::Scene scene = solve::LoadScene(m, scene_file);
     spdlog::info("reference: scene {}", scene.description);
 
-    const solve::ReferenceMesh mesh = solve::LoadReferenceMesh(c.dir, m);
+    const reference::ReferenceMesh mesh = reference::LoadReferenceMesh(c.dir, m);
     spdlog::info("reference: {} triangles, {} points", FormatCount(double(mesh.triangles.size())),
                  c.points);
-    std::vector<solve::ReferencePoint> points =
-        solve::ChooseReferencePoints(mesh, scene, c.points, c.seed);
-    const solve::ReferenceTracer tracer(mesh, scene);
-    solve::ReferenceOptions opt;
+    std::vector<reference::ReferencePoint> points =
+        reference::ChooseReferencePoints(mesh, scene, c.points, c.seed);
+    const reference::ReferenceTracer tracer(mesh, scene);
+    reference::ReferenceOptions opt;
     opt.seed = c.seed;
     opt.min_samples = c.min_samples;
     opt.max_samples = c.max_samples;
     opt.target_relative_error = c.target;
     opt.time_limit = c.time_limit;
-    const solve::ReferenceStats st = tracer.Estimate(points, opt, [&](int round, uint64_t done) {
+    const reference::ReferenceStats st = tracer.Estimate(points, opt, [&](int round, uint64_t done) {
         spdlog::info("  round {}: {} of {} points converged", round, done, points.size());
     });
     spdlog::info("reference: {} paths, {} rays in {} ({})", FormatCount(double(st.paths)),
@@ -129,17 +129,17 @@ int RunReference(const ReferenceCommand& c) {
                      {"time_limit", c.time_limit}};
     j["stats"] = {{"rounds", st.rounds},   {"paths", st.paths},         {"rays", st.rays},
                   {"seconds", st.seconds}, {"converged", st.converged}, {"stop", st.stop}};
-    std::vector<solve::ProbeSite> sites;
+    std::vector<output::ProbeSite> sites;
     std::vector<Vec3d> ref, se;
     for (const auto& p : points) {
         sites.push_back({p.chart, p.local_triangle, p.barycentric});
         ref.push_back(p.b);
         se.push_back(p.b_se);
     }
-    std::vector<solve::ProbeValue> values;
+    std::vector<output::ProbeValue> values;
     if (solved && c.scene_file.empty()) {
-        const solve::BakeView view = solve::OpenBakeView(c.dir);
-        const solve::ProbeError e = Score(view, sites, ref, se, values);
+        const output::BakeView view = output::OpenBakeView(c.dir);
+        const output::ProbeError e = Score(view, sites, ref, se, values);
         j["error"] = ErrorJson(e);
         spdlog::info(
             "bake vs reference: relative RMS {:.2f}% (reference noise {:.2f}%), max {:.1f}%",
@@ -188,7 +188,7 @@ int RunCompare(const CompareCommand& c) {
     if (!r.is_object() || r.value("format", "") != "mebake-reference-1" || !r.contains("points") ||
         !r["points"].is_array())
         InputError({c.reference}, "not a `mebake reference` output (format mebake-reference-1)");
-    std::vector<solve::ProbeSite> sites;
+    std::vector<output::ProbeSite> sites;
     std::vector<Vec3d> ref, se;
     for (size_t i = 0; i < r["points"].size(); ++i) {
         const json& p = r["points"][i];
@@ -203,9 +203,9 @@ int RunCompare(const CompareCommand& c) {
         ref.push_back(ReadVec3(p, c.reference, i, "B"));
         se.push_back(ReadVec3(p, c.reference, i, "B_se"));
     }
-    const solve::BakeView view = solve::OpenBakeView(c.dir);
-    std::vector<solve::ProbeValue> values;
-    const solve::ProbeError e = Score(view, sites, ref, se, values);
+    const output::BakeView view = output::OpenBakeView(c.dir);
+    std::vector<output::ProbeValue> values;
+    const output::ProbeError e = Score(view, sites, ref, se, values);
     spdlog::info("bake vs reference: relative RMS {:.2f}% (reference noise {:.2f}%), max {:.1f}%",
                  100 * e.relative_rms, 100 * e.noise_rms, 100 * e.relative_max);
     json j;

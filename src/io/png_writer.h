@@ -1,7 +1,7 @@
 // 8-bit sRGB PNG output with libpng (http://www.libpng.org), row by row, into any
 // io::OutputStream (a file, stdout, or memory for embedding in a .glb). The file is
 // tagged with an sRGB chunk (plus the matching gAMA/cHRM for old readers) and a
-// "Software" text chunk; pixels must already be sRGB-encoded (solve/tonemap.h does it).
+// "Software" text chunk; pixels must already be sRGB-encoded (output/tonemap.h does it).
 #pragma once
 
 #include "io/byte_stream.h"

@@ -1,6 +1,6 @@
 // Tensor-product Legendre basis of order M = 0..3 on a quadtree node of a master element
 // (seed paper 000, sections 2-4: orthonormal wavelet bases in parameter space, Gauss
-// quadrature, push-pull matrices that do not depend on the level; DESIGN.md section 3).
+// quadrature, push-pull matrices that do not depend on the level; docs/method.md, Basis and fields).
 //
 // Conventions used by every function here:
 // - A node is a square of the chart's unit square; (s,t) in [0,1]^2 are the node's local

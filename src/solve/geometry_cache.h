@@ -1,6 +1,6 @@
 // The charts' sampled geometry pyramids in one memory-mapped file, with RAII pins and a
-// residency budget (DESIGN.md section 4: "pyramids live in memory-mapped files; a tile
-// cache pins tiles with RAII handles and evicts under the budget").
+// residency budget (docs/architecture.md, Memory: pyramids live in a memory-mapped file;
+// pinned charts stay resident, the rest is evicted under the budget).
 //
 // Every chart's pyramid (stream/geometry_image.h, 64 bytes per texel, all levels) is
 // written once into an unlinked file under the bake directory, which is then mapped

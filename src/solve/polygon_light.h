@@ -1,11 +1,11 @@
 // Exact vector irradiance of a uniform planar polygonal emitter: Lambert's formula
 // (J. H. Lambert 1760; in graphics J. Arvo, "The Irradiance Jacobian for Partially Occluded
-// Polyhedral Sources", SIGGRAPH 1994), used for the fully visible direct term (DESIGN.md 3).
+// Polyhedral Sources", SIGGRAPH 1994), used for the fully visible direct term (docs/method.md, Direct light).
 //
 // Convention. E points from the receiver towards the light:
 //   E(x) = integral over the emitter of L cos(theta_y) w / r^2 dA(y),  w = (y-x)/r, r = |y-x|,
 // so the irradiance of a surface at x with normal n (when all of the emitter is above its
-// tangent plane) is n . E(x). This is the DESIGN.md transport
+// tangent plane) is n . E(x). This is the transport of docs/method.md
 //   dE(x) = B(y) max(0, (x-y).n(y)) (y-x) / (pi |y-x|^4) dA(y)   with B = pi L.
 // Closed form: E(x) = (L/2) sum_k theta_k g_k, theta_k the angle the edge (v_k, v_k+1)
 // subtends at x and g_k the unit normal of the plane through x and that edge, oriented

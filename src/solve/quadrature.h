@@ -1,9 +1,9 @@
 // Point-to-patch transfer of vector irradiance by quadrature over emitter samples, and a
 // conservative bound of a node-to-node transfer used to pick the "suitable scale"
-// (seed paper 000 section 2 transport; DESIGN.md section 3; the bound is the usual
+// (seed paper 000 section 2 transport; docs/method.md; the bound is the usual
 // hierarchical-radiosity estimate F <= A cos / (pi d^2), Hanrahan et al. 1991).
 //
-// Transfer (DESIGN.md): dE(x) = sum_k B_k V_k max(0, (x-y_k).n_k) (y_k - x) / (pi |y_k-x|^4) w_k
+// Transfer: dE(x) = sum_k B_k V_k max(0, (x-y_k).n_k) (y_k - x) / (pi |y_k-x|^4) w_k
 // The receiver has no cosine (E is a vector field). With Kernel::kDisk the denominator
 // pi r^4 becomes r^2 (pi r^2 + w_k): each sample is treated as a disc of area w_k seen
 // on-axis (Wallace et al. 1989), so no sample contributes more than B_k however close x is;

@@ -1,4 +1,4 @@
-// The Master-Element solver (seed 000 sections 2-4, DESIGN.md section 3).
+// The Master-Element solver (seed 000 sections 2-4; docs/method.md).
 //
 //  1. Direct pass: per chart, an adaptive quadtree is refined from the root until the
 //     polynomial fitted at the Gauss points (collocation) matches the direct light at a

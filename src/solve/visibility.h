@@ -1,5 +1,5 @@
 // The one wrapper over Embree 3 (https://www.embree.org): triangle scenes, batched occlusion
-// queries for segments (the visibility term V(x,y) of the transport, DESIGN.md section 3)
+// queries for segments (the visibility term V(x,y) of the transport, docs/method.md)
 // and closest-hit queries. Nothing else in mebake includes <embree3/rtcore.h>.
 //
 // What it takes care of, so callers do not have to:
@@ -111,7 +111,7 @@ private:
 int64_t EmbreeMemoryBytes();
 int64_t EmbreePeakMemoryBytes();
 // Embree operations that would push EmbreeMemoryBytes() over `bytes` fail with an Error
-// (0 = no limit). Meant for the caller's memory budget (DESIGN.md section 4).
+// (0 = no limit). Meant for the caller's memory budget (docs/architecture.md, Memory).
 void SetEmbreeMemoryLimit(int64_t bytes);
 
 }  // namespace mebake::solve

@@ -1,5 +1,5 @@
 // `mebake ingest`: meshes of any size, from files or a pipe, into a bake directory of
-// chart tiles, in memory bounded by the budget (DESIGN.md sections 1-4):
+// chart tiles, in memory bounded by the budget:
 //   pass 1 spill     vertices and faces to flat files (spill.h)
 //   pass 2 bricks    faces binned by Morton order into bricks that fit the budget (bricks.h)
 //   pass 3 charts    per brick in parallel: repair, charts, parameterization, tiles

@@ -2,7 +2,7 @@
 // (accessor counts, POSITION min/max, materials in both light-map modes), binary data read
 // back through the accessors, and the Khronos validator when it is installed.
 #include "core/error.h"
-#include "gltf_validate.h"
+#include "support/gltf_validate.h"
 #include "io/gltf_writer.h"
 #include "io/png_writer.h"
 

@@ -17,7 +17,7 @@ struct Tri {
     Vec3d a, b, c;
 };
 
-// DESIGN.md transport integrated by brute force over triangles: each triangle is split into
+// The transport (docs/method.md) integrated by brute force over triangles: each triangle is split into
 // 4^levels pieces, each integrated with the collapsed (Duffy) 8x8 Gauss rule.
 // dE(x) = B max(0,(x-y).n) (y-x) / (pi |y-x|^4) dA, B = pi L; with `receiver_n` the integrand
 // is instead L max(0, cos theta_x) cos theta_y / r^2 (the horizon-clipped irradiance).

@@ -5,13 +5,13 @@
 #pragma once
 
 #include "core/vec.h"
-#include "solve/bake_view.h"
+#include "output/bake_view.h"
 
 #include <cstdint>
 #include <span>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 // A point of a chart's tile: triangle index within the tile and barycentrics.
 struct ProbeSite {
@@ -46,4 +46,4 @@ struct ProbeError {
 ProbeError CompareRadiosity(std::span<const Vec3d> reference, std::span<const Vec3d> reference_se,
                             std::span<const Vec3d> bake);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

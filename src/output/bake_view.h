@@ -25,7 +25,14 @@
 #include <string>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::output {
+
+// The solver's types every output reads.
+using solve::ChartField;
+using solve::Material;
+using solve::Scene;
+using solve::Solution;
+using solve::SolutionReader;
 
 struct BakeView {
     std::string dir;
@@ -128,4 +135,4 @@ private:
     Material default_material_;
 };
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

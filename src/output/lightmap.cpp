@@ -1,4 +1,4 @@
-#include "solve/lightmap.h"
+#include "output/lightmap.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -11,7 +11,7 @@
 #include <memory>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
@@ -258,4 +258,4 @@ std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas,
     return bytes;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -15,7 +15,7 @@
 #include <optional>
 #include <string>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 enum class ToneCurve { Filmic, Reinhard, Clamp };
 
@@ -37,4 +37,4 @@ uint8_t ToSrgb8(float display_linear);
 // Radiance (linear RGB) -> 8-bit sRGB.
 void ToneMapPixel(const Vec3f& radiance, const ToneMap& tm, uint8_t out[3]);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -1,4 +1,4 @@
-#include "solve/reference.h"
+#include "reference/reference.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -15,7 +15,7 @@
 #include <numbers>
 #include <span>
 
-namespace mebake::solve {
+namespace mebake::reference {
 
 namespace {
 
@@ -42,7 +42,7 @@ struct Rng {
 float SrgbDecode(float c) {
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
-Vec3d Albedo(const Material& m, const Vec3f& color) {
+Vec3d Albedo(const solve::Material& m, const Vec3f& color) {
     Vec3f a = m.albedo;
     if (m.use_vertex_colors && color.x >= 0)
         for (int c = 0; c < 3; ++c)
@@ -124,7 +124,7 @@ struct Emitter {
     }
 };
 
-Emitter MakePolygonEmitter(const PolygonLight& pl) {
+Emitter MakePolygonEmitter(const solve::PolygonLight& pl) {
     Emitter e;
     e.radiance = pl.radiance;
     e.two_sided = pl.two_sided;
@@ -210,7 +210,7 @@ ReferenceMesh LoadReferenceMesh(const std::string& dir, const stream::Manifest& 
 
 namespace {
 
-void CheckMaterials(const ReferenceMesh& mesh, const Scene& scene) {
+void CheckMaterials(const ReferenceMesh& mesh, const solve::Scene& scene) {
     for (size_t t = 0; t < mesh.material.size(); ++t) {
         const uint32_t packed = mesh.material[t];
         if ((packed >> 16) >= scene.per_input.size() ||
@@ -222,11 +222,11 @@ void CheckMaterials(const ReferenceMesh& mesh, const Scene& scene) {
 
 struct Surface {  // a point of a triangle as shading sees it
     Vec3d position, normal, geometric_normal, albedo;
-    const Material* material = nullptr;
+    const solve::Material* material = nullptr;
     Vec2f uv;
 };
 
-Surface SurfaceAt(const ReferenceMesh& mesh, const Scene& scene, uint32_t t, const double b[3]) {
+Surface SurfaceAt(const ReferenceMesh& mesh, const solve::Scene& scene, uint32_t t, const double b[3]) {
     const auto& f = mesh.triangles[t];
     const Vec3d p0(mesh.position[f[0]]), p1(mesh.position[f[1]]), p2(mesh.position[f[2]]);
     Surface s;
@@ -256,7 +256,7 @@ Surface SurfaceAt(const ReferenceMesh& mesh, const Scene& scene, uint32_t t, con
 
 }  // namespace
 
-std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const Scene& scene,
+std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const solve::Scene& scene,
                                                   int n, uint64_t seed) {
     if (n < 1)
         UsageError("--points must be at least 1");
@@ -306,20 +306,20 @@ std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, con
 
 struct ReferenceTracer::Impl {
     const ReferenceMesh& mesh;
-    const Scene& scene;
-    VisibilityScene vis;
+    const solve::Scene& scene;
+    solve::VisibilityScene vis;
     std::vector<Emitter> emitters;
     std::vector<double> emitter_cdf;  // by power
     double eps = 0;                   // ray origin offset along the geometric normal
     mutable std::atomic<uint64_t> rays{0};
 
-    Impl(const ReferenceMesh& m, const Scene& s)
+    Impl(const ReferenceMesh& m, const solve::Scene& s)
         : mesh(m),
           scene(s),
-          vis(VisibilityOptions{.compact = false,
+          vis(solve::VisibilityOptions{.compact = false,
                                 .robust = true,
-                                .quality = BuildQuality::kHigh,
-                                .method = TraceMethod::kSingle,
+                                .quality = solve::BuildQuality::kHigh,
+                                .method = solve::TraceMethod::kSingle,
                                 .coherent = false}) {
         CheckMaterials(mesh, scene);
         std::vector<float> pos;
@@ -338,13 +338,13 @@ struct ReferenceTracer::Impl {
         vis.Commit();
         eps = mesh.position.empty() ? 1e-6 : 1e-5 * Length(hi - lo) + 1e-30;
 
-        for (const PolygonLight& pl : scene.lights) {
+        for (const solve::PolygonLight& pl : scene.lights) {
             Emitter e = MakePolygonEmitter(pl);
             if (e.area > 0 && MaxOf(e.radiance) > 0)
                 emitters.push_back(std::move(e));
         }
         for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const Material& mat = scene.MaterialOf(mesh.material[t]);
+            const solve::Material& mat = scene.MaterialOf(mesh.material[t]);
             if (!mat.emissive())
                 continue;
             const auto& f = mesh.triangles[t];
@@ -368,13 +368,13 @@ struct ReferenceTracer::Impl {
     }
 
     Vec3d SkyRadiance(const Vec3d& w) const {
-        const Sky& sky = scene.sky;
-        if (sky.type == Sky::Type::None)
+        const solve::Sky& sky = scene.sky;
+        if (sky.type == solve::Sky::Type::None)
             return {};
         const double c = Dot(Normalize(sky.up), w);
         if (c <= 0)
             return {};
-        return sky.type == Sky::Type::Overcast ? sky.radiance * ((1 + 2 * c) / 3) : sky.radiance;
+        return sky.type == solve::Sky::Type::Overcast ? sky.radiance * ((1 + 2 * c) / 3) : sky.radiance;
     }
 
     // Direct light from the emitters at x (one emitter sample): irradiance about n and, if
@@ -406,7 +406,7 @@ struct ReferenceTracer::Impl {
             cos_l = std::abs(cos_l);
         if (cos_l <= 0)
             return;
-        Segment s{float(o.x), float(o.y), float(o.z), 0,
+        solve::Segment s{float(o.x), float(o.y), float(o.z), 0,
                   float(d.x), float(d.y), float(d.z), 1.0f - 1e-4f};
         uint8_t occluded = 0;
         vis.Occluded({&s, 1}, {&occluded, 1});
@@ -425,12 +425,12 @@ struct ReferenceTracer::Impl {
     Vec3d Incoming(Vec3d o, Vec3d w, Rng& rng, const ReferenceOptions& opt) const {
         Vec3d throughput(1, 1, 1), radiance{};
         for (int depth = 0; depth < opt.max_depth; ++depth) {
-            Segment s{float(o.x), float(o.y), float(o.z), 0,
+            solve::Segment s{float(o.x), float(o.y), float(o.z), 0,
                       float(w.x), float(w.y), float(w.z), std::numeric_limits<float>::infinity()};
-            Hit h;
+            solve::Hit h;
             vis.Intersect({&s, 1}, {&h, 1});
             rays.fetch_add(1, std::memory_order_relaxed);
-            if (h.prim_id == kNoHit) {
+            if (h.prim_id == solve::kNoHit) {
                 radiance += Mul(throughput, SkyRadiance(w));
                 break;
             }
@@ -479,7 +479,7 @@ struct ReferenceTracer::Impl {
     }
 };
 
-ReferenceTracer::ReferenceTracer(const ReferenceMesh& mesh, const Scene& scene)
+ReferenceTracer::ReferenceTracer(const ReferenceMesh& mesh, const solve::Scene& scene)
     : impl_(std::make_unique<Impl>(mesh, scene)) {}
 ReferenceTracer::~ReferenceTracer() = default;
 
@@ -585,4 +585,4 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
     return st;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::reference

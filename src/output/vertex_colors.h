@@ -18,13 +18,13 @@
 #pragma once
 
 #include "io/mesh_stream.h"
-#include "solve/bake_view.h"
-#include "solve/tonemap.h"
+#include "output/bake_view.h"
+#include "output/tonemap.h"
 
 #include <cstdint>
 #include <string>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 struct VertexColorOptions {
     ToneMap tone;
@@ -47,4 +47,4 @@ struct VertexColorStats {
 VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path,
                                    const VertexColorOptions& options);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

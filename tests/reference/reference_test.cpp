@@ -1,29 +1,29 @@
-// The path-traced reference (solve/reference.h) against closed forms: Lambert's square light
+// The path-traced reference (reference/reference.h) against closed forms: Lambert's square light
 // over a plane, a uniform sky over a plane, and the furnace (a closed emitting cube, where
 // B = pi Le / (1 - rho) everywhere); its determinism across thread counts; and the probe
-// (solve/probe.h) on a hand-made solved bake.
-#include "solve/reference.h"
+// (output/probe.h) on a hand-made solved bake.
+#include "reference/reference.h"
 
-#include "bake_fixture.h"
 #include "core/parallel.h"
-#include "solve/bake_view.h"
+#include "output/bake_view.h"
+#include "output/probe.h"
 #include "solve/polygon_light.h"
-#include "solve/probe.h"
 #include "solve/sky.h"
+#include "support/bake_fixture.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::reference {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Scene OneMaterial(float albedo, Vec3f emission = {}) {
-    Scene s;
-    Material m;
+solve::Scene OneMaterial(float albedo, Vec3f emission = {}) {
+    solve::Scene s;
+    solve::Material m;
     m.albedo = Vec3f(albedo, albedo, albedo);
     m.use_vertex_colors = false;
     m.emission = emission;
@@ -76,8 +76,8 @@ void ExpectWithinSe(double value, double se, double expected, const char* what, 
 
 TEST(ReferenceTest, SquareLightOverPlaneMatchesLambert) {
     const ReferenceMesh mesh = Plane(50);  // big enough to sample points under the light
-    Scene scene = OneMaterial(0.5f);
-    PolygonLight light;
+    solve::Scene scene = OneMaterial(0.5f);
+    solve::PolygonLight light;
     // A unit square at height 1, facing down (counter-clockwise seen from below).
     light.vertices = {{-0.5, -0.5, 1}, {-0.5, 0.5, 1}, {0.5, 0.5, 1}, {0.5, -0.5, 1}};
     light.radiance = Vec3d(1, 2, 3);
@@ -95,8 +95,8 @@ TEST(ReferenceTest, SquareLightOverPlaneMatchesLambert) {
     EXPECT_GT(st.rays, 0u);
     for (int i = 0; i < 4; ++i) {
         const auto& p = points[size_t(i)];
-        const double irr = IrradianceClipped(light.vertices, 1.0, where[i], Vec3d(0, 0, 1));
-        const Vec3d e = VectorIrradiance(light.vertices, 1.0, where[i]);
+        const double irr = solve::IrradianceClipped(light.vertices, 1.0, where[i], Vec3d(0, 0, 1));
+        const Vec3d e = solve::VectorIrradiance(light.vertices, 1.0, where[i]);
         for (int c = 0; c < 3; ++c) {
             ExpectWithinSe(p.b[c], p.b_se[c], 0.5 * light.radiance[c] * irr, "B", i);
             for (int k = 0; k < 3; ++k)
@@ -109,8 +109,8 @@ TEST(ReferenceTest, SquareLightOverPlaneMatchesLambert) {
 
 TEST(ReferenceTest, UniformSkyOverPlane) {
     const ReferenceMesh mesh = Plane(1);
-    Scene scene = OneMaterial(0.6f);
-    scene.sky.type = Sky::Type::Uniform;
+    solve::Scene scene = OneMaterial(0.6f);
+    scene.sky.type = solve::Sky::Type::Uniform;
     scene.sky.radiance = Vec3d(0.5, 1, 2);
     scene.sky.up = Vec3d(0, 0, 1);
     const ReferenceTracer tracer(mesh, scene);
@@ -147,7 +147,7 @@ TEST(ReferenceTest, FurnaceMatchesGeometricSeries) {
     }
     const float rho = 0.7f;
     const Vec3f le(1, 0.5f, 0.25f);
-    const Scene scene = OneMaterial(rho, le);
+    const solve::Scene scene = OneMaterial(rho, le);
     const ReferenceTracer tracer(mesh, scene);
     auto points = ChooseReferencePoints(mesh, scene, 5, 5);
     tracer.Estimate(points, Fast(0.003));
@@ -166,7 +166,7 @@ TEST(ReferenceTest, FurnaceMatchesGeometricSeries) {
 
 TEST(ReferenceTest, SameResultForAnyThreadCount) {
     const ReferenceMesh mesh = InwardCube();
-    const Scene scene = OneMaterial(0.5f, Vec3f(1, 1, 1));
+    const solve::Scene scene = OneMaterial(0.5f, Vec3f(1, 1, 1));
     const ReferenceTracer tracer(mesh, scene);
     ReferenceOptions o = Fast(0.001);
     o.min_samples = 64;
@@ -191,7 +191,7 @@ TEST(ReferenceTest, PointsAreAreaWeightedAndDeterministic) {
     ReferenceMesh mesh;
     AddQuad(mesh, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});  // area 1
     AddQuad(mesh, {2, 0, 0}, {5, 0, 0}, {5, 1, 0}, {2, 1, 0});  // area 3
-    const Scene scene = OneMaterial(0.5f);
+    const solve::Scene scene = OneMaterial(0.5f);
     const auto a = ChooseReferencePoints(mesh, scene, 4000, 1);
     const auto b = ChooseReferencePoints(mesh, scene, 4000, 1);
     int big = 0;
@@ -208,32 +208,32 @@ TEST(ReferenceTest, PointsAreAreaWeightedAndDeterministic) {
 // made-up field): the reference sees the sky's closed form, and the probe returns exactly
 // the field the fixture wrote.
 TEST(ReferenceTest, BakeDirectoryReferenceAndProbe) {
-    const std::string dir = testing::FreshDir("reference");
-    testing::TinyBakeOptions opt;
+    const std::string dir = solve::testing::FreshDir("reference");
+    solve::testing::TinyBakeOptions opt;
     opt.light[0].b = Vec3f(1, 1, 1);
-    testing::WriteTinyBake(dir, opt);
-    const BakeView view = OpenBakeView(dir);
+    solve::testing::WriteTinyBake(dir, opt);
+    const output::BakeView view = output::OpenBakeView(dir);
     const ReferenceMesh mesh = LoadReferenceMesh(dir, view.manifest);
     ASSERT_EQ(mesh.triangles.size(), 4u);
     auto points = ChooseReferencePoints(mesh, view.scene, 6, 2);
     const ReferenceTracer tracer(mesh, view.scene);
     tracer.Estimate(points, Fast(0.005));
-    std::vector<ProbeSite> sites;
+    std::vector<output::ProbeSite> sites;
     for (const auto& p : points) {
         for (int c = 0; c < 3; ++c) {
-            const SkyModel sky = SkyModel::Uniform(view.scene.sky.radiance[c], view.scene.sky.up);
-            ExpectWithinSe(p.b[c], p.b_se[c], 0.5 * SkyIrradiance(sky, Vec3d(0, 0, 1)), "B", 0);
+            const solve::SkyModel sky = solve::SkyModel::Uniform(view.scene.sky.radiance[c], view.scene.sky.up);
+            ExpectWithinSe(p.b[c], p.b_se[c], 0.5 * solve::SkyIrradiance(sky, Vec3d(0, 0, 1)), "B", 0);
         }
         sites.push_back({p.chart, p.local_triangle, p.barycentric});
     }
-    const auto values = ProbeSolution(view, sites);
+    const auto values = output::ProbeSolution(view, sites);
     for (size_t i = 0; i < points.size(); ++i) {
-        const Vec3f expected = testing::ExpectedB(opt, int(points[i].chart), points[i].uv.x);
+        const Vec3f expected = solve::testing::ExpectedB(opt, int(points[i].chart), points[i].uv.x);
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(values[i].b[c], expected[c], 1e-4f * expected[c]);
     }
     sites.push_back({0, 99, Vec3f(1, 0, 0)});
-    EXPECT_THROW(ProbeSolution(view, sites), Error);
+    EXPECT_THROW(output::ProbeSolution(view, sites), Error);
     std::filesystem::remove_all(dir);
 }
 
@@ -242,7 +242,7 @@ TEST(ReferenceTest, CompareRadiosityMetrics) {
     const std::vector<Vec3d> se(4, Vec3d(0.01, 0, 0));
     std::vector<Vec3d> bake = ref;
     bake[3] = Vec3d(1.1, 1, 1);
-    const ProbeError e = CompareRadiosity(ref, se, bake);
+    const output::ProbeError e = output::CompareRadiosity(ref, se, bake);
     const double level = std::sqrt(6.0 / 4);
     EXPECT_NEAR(e.relative_rms, std::sqrt(0.01 / 4) / level, 1e-12);
     EXPECT_NEAR(e.relative_max, 0.1 / level, 1e-12);
@@ -251,4 +251,4 @@ TEST(ReferenceTest, CompareRadiosityMetrics) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake::reference

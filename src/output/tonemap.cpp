@@ -1,9 +1,9 @@
-#include "solve/tonemap.h"
+#include "output/tonemap.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 std::optional<ToneCurve> ParseToneCurve(const std::string& name) {
     if (name == "filmic")
@@ -49,4 +49,4 @@ void ToneMapPixel(const Vec3f& radiance, const ToneMap& tm, uint8_t out[3]) {
         out[c] = ToSrgb8(ApplyToneCurve(radiance[c], tm));
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -14,15 +14,15 @@
 
 #include "core/vec.h"
 #include "io/exr_writer.h"
-#include "solve/bake_view.h"
-#include "solve/tonemap.h"
+#include "output/bake_view.h"
+#include "output/tonemap.h"
 
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 struct Camera {
     Vec3d eye{0, 0, 1}, target{0, 0, 0}, up{0, 1, 0};
@@ -59,4 +59,4 @@ RenderedImage Render(const BakeView& view, const RenderOptions& options);
 void WriteRenderedImage(const RenderedImage& image, const std::string& path, const ToneMap& tone,
                         io::ExrPixelType exr_type = io::ExrPixelType::Half);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::reference {
 
 // The triangles of all tiles, in chart order, with what shading needs per vertex.
 struct ReferenceMesh {
@@ -80,7 +80,7 @@ struct ReferencePoint {
 };
 
 // n points, area-weighted over all triangles, deterministic for (mesh, seed).
-std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const Scene& scene,
+std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const solve::Scene& scene,
                                                   int n, uint64_t seed);
 
 struct ReferenceStats {
@@ -94,7 +94,7 @@ struct ReferenceStats {
 class ReferenceTracer {
 public:
     // Keeps references to mesh and scene; builds the Embree scene.
-    ReferenceTracer(const ReferenceMesh& mesh, const Scene& scene);
+    ReferenceTracer(const ReferenceMesh& mesh, const solve::Scene& scene);
     ~ReferenceTracer();
 
     // Estimates B and E at the points (their place fields must be set, e.g. by
@@ -107,4 +107,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace mebake::solve
+}  // namespace mebake::reference

@@ -17,11 +17,11 @@
 // Memory: the outline edges still waiting for their other side, and 8 bytes per sample.
 #pragma once
 
-#include "solve/bake_view.h"
+#include "output/bake_view.h"
 
 #include <cstdint>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 struct SeamOptions {
     int samples = 3;  // points per edge, 1 to 16
@@ -41,4 +41,4 @@ struct SeamStats {
 
 SeamStats MeasureSeams(const BakeView& view, const SeamOptions& options = {});
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -19,9 +19,9 @@
 #pragma once
 
 #include "io/exr_writer.h"
-#include "solve/atlas.h"
-#include "solve/bake_view.h"
-#include "solve/tonemap.h"
+#include "output/atlas.h"
+#include "output/bake_view.h"
+#include "output/tonemap.h"
 
 #include <cstdint>
 #include <functional>
@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 enum class MapContent { Radiosity, Irradiance };
 
@@ -74,4 +74,4 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
 std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas, uint32_t page,
                                        const ToneMap& tone);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -2,13 +2,13 @@
 // uvs, embedded light map, Khronos validator), PLY/OBJ with light-map uvs (UDIM offsets
 // over several pages), and the per-vertex colour PLY (input order and count, averaging on
 // shared vertices, black unreferenced vertices, hole fills dropped).
-#include "../io/gltf_validate.h"
-#include "bake_fixture.h"
+#include "support/gltf_validate.h"
+#include "support/bake_fixture.h"
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "io/png_writer.h"
-#include "solve/export_mesh.h"
-#include "solve/vertex_colors.h"
+#include "output/export_mesh.h"
+#include "output/vertex_colors.h"
 
 #include <gtest/gtest.h>
 
@@ -20,14 +20,14 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::output {
 namespace {
 
 using nlohmann::json;
 constexpr float kPi = float(std::numbers::pi);
 
-testing::MeshCollector ReadBack(const std::string& path, io::MeshFormat f) {
-    testing::MeshCollector m;
+solve::testing::MeshCollector ReadBack(const std::string& path, io::MeshFormat f) {
+    solve::testing::MeshCollector m;
     auto in = io::InputStream::Open(path);
     io::ReadMesh(*in, f, m);
     return m;
@@ -42,18 +42,18 @@ std::vector<uint8_t> Slurp(const std::string& path) {
 class ExportTest : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = testing::FreshDir("export");
+        dir_ = solve::testing::FreshDir("export");
         opt_.light[0] = {Vec3f(2, 4, 6), Vec3f(1, 1, 1)};
         opt_.light[1] = {Vec3f(1, 2, 3), Vec3f(0, 0, 0)};
         opt_.hole_fill_last = true;
-        testing::WriteTinyBake(dir_, opt_);
+        solve::testing::WriteTinyBake(dir_, opt_);
         view_ = OpenBakeView(dir_);
         atlas_ = PackAtlas(ChartResolutions(view_), {});
     }
     void TearDown() override { std::filesystem::remove_all(dir_); }
 
     std::string dir_;
-    testing::TinyBakeOptions opt_;
+    solve::testing::TinyBakeOptions opt_;
     BakeView view_;
     Atlas atlas_;
 };
@@ -173,10 +173,10 @@ TEST_F(ExportTest, VertexColorsInInputOrder) {
     const std::vector<std::vector<std::pair<int, double>>> uses = {
         {{0, 0}}, {{0, 1}, {1, 0}}, {{1, 1}}, {{0, 0}}, {{0, 1}, {1, 0}}, {{1, 1}}, {}};
     for (uint64_t id = 0; id < 7; ++id) {
-        EXPECT_EQ(m.position[id], testing::GlobalVertex(id));
+        EXPECT_EQ(m.position[id], solve::testing::GlobalVertex(id));
         Vec3f b{};
         for (auto [c, u] : uses[id])
-            b += testing::ExpectedB(opt_, c, u);
+            b += solve::testing::ExpectedB(opt_, c, u);
         if (!uses[id].empty())
             b = b / float(uses[id].size());
         uint8_t want[3];
@@ -199,7 +199,7 @@ TEST_F(ExportTest, VertexColorsInInputOrder) {
     WriteVertexColors(view_, dir_ + "/vcf.ply", vo);
     const auto f = ReadBack(dir_ + "/vcf.ply", io::MeshFormat::Ply);
     EXPECT_TRUE(f.header.colors_are_float);
-    const Vec3f b0 = testing::ExpectedB(opt_, 0, 0) / kPi * 0.25f;
+    const Vec3f b0 = solve::testing::ExpectedB(opt_, 0, 0) / kPi * 0.25f;
     for (int k = 0; k < 3; ++k)
         EXPECT_NEAR(f.color[0][k], b0[k], 1e-5);
 }
@@ -211,4 +211,4 @@ TEST_F(ExportTest, MissingVertexSpillIsAnError) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake::output

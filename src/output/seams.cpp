@@ -1,4 +1,4 @@
-#include "solve/seams.h"
+#include "output/seams.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
@@ -172,4 +172,4 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     return st;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

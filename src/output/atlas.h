@@ -28,7 +28,7 @@
 #include <span>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 struct AtlasOptions {
     uint32_t max_size = 8192;  // largest page side, texels
@@ -72,4 +72,4 @@ struct Atlas {
 // chart's block does not fit in max_size, or when max_size is not a power of two >= 16.
 Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& options = {});
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

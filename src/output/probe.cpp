@@ -1,4 +1,4 @@
-#include "solve/probe.h"
+#include "output/probe.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numeric>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 std::vector<ProbeValue> ProbeSolution(const BakeView& view, std::span<const ProbeSite> sites) {
     std::vector<ProbeValue> out(sites.size());
@@ -96,4 +96,4 @@ ProbeError CompareRadiosity(std::span<const Vec3d> reference, std::span<const Ve
     return r;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

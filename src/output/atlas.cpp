@@ -1,4 +1,4 @@
-#include "solve/atlas.h"
+#include "output/atlas.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numeric>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
@@ -168,4 +168,4 @@ Atlas PackAtlas(std::span<const uint32_t> resolutions, const AtlasOptions& opt) 
     return atlas;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

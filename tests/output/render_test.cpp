@@ -1,9 +1,9 @@
 // Rendering the two-square fixture head-on: pixels on the squares show B / pi (each
 // chart its own), missed pixels the background or the sky, glossy off equals diffuse,
 // and the image is the same for any thread count.
-#include "solve/render.h"
+#include "output/render.h"
 
-#include "bake_fixture.h"
+#include "support/bake_fixture.h"
 #include "core/parallel.h"
 #include "io/exr_writer.h"
 #include "io/png_writer.h"
@@ -14,7 +14,7 @@
 #include <filesystem>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::output {
 namespace {
 
 constexpr float kPi = float(std::numbers::pi);
@@ -22,10 +22,10 @@ constexpr float kPi = float(std::numbers::pi);
 class RenderTest : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = testing::FreshDir("render");
+        dir_ = solve::testing::FreshDir("render");
         opt_.light[0] = {Vec3f(2, 4, 6), Vec3f(0, 0, 0)};
         opt_.light[1] = {Vec3f(1, 1, 1), Vec3f(0, 0, 0)};
-        testing::WriteTinyBake(dir_, opt_);
+        solve::testing::WriteTinyBake(dir_, opt_);
         view_ = OpenBakeView(dir_);
         ro_.camera.eye = Vec3d(1, 0.5, 3);
         ro_.camera.target = Vec3d(1, 0.5, 0);
@@ -47,7 +47,7 @@ protected:
     }
 
     std::string dir_;
-    testing::TinyBakeOptions opt_;
+    solve::testing::TinyBakeOptions opt_;
     BakeView view_;
     RenderOptions ro_;
 };
@@ -65,7 +65,7 @@ TEST_F(RenderTest, HeadOnQuadShowsRadianceAndBackground) {
             const bool outside = g.x < -0.01 || g.x > 2.01 || g.y < -0.01 || g.y > 1.01;
             if (inside && std::abs(g.x - 1) > 0.01) {
                 const int c = g.x < 1 ? 0 : 1;
-                const Vec3f want = testing::ExpectedB(opt_, c, 0) / kPi;
+                const Vec3f want = solve::testing::ExpectedB(opt_, c, 0) / kPi;
                 for (int k = 0; k < 3; ++k)
                     EXPECT_NEAR(v[k], want[k], 1e-5) << px << "," << py;
                 ++on[c];
@@ -161,4 +161,4 @@ TEST_F(RenderTest, BadCamerasAreUsageErrors) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake::output

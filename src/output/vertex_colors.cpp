@@ -1,4 +1,4 @@
-#include "solve/vertex_colors.h"
+#include "output/vertex_colors.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -16,7 +16,7 @@
 #include <numbers>
 #include <unistd.h>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
@@ -177,4 +177,4 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
     return st;
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -1,7 +1,7 @@
 // Atlas packing: blocks (square + gutters) never overlap and stay inside their page, pages
 // are powers of two no larger than the limit, the result is deterministic, and the uv
 // mapping and its texel inverse agree.
-#include "solve/atlas.h"
+#include "output/atlas.h"
 
 #include "core/error.h"
 
@@ -9,7 +9,7 @@
 
 #include <cmath>
 
-namespace mebake::solve {
+namespace mebake::output {
 namespace {
 
 std::vector<uint32_t> RandomResolutions(size_t n, uint32_t seed) {
@@ -186,4 +186,4 @@ TEST(Atlas, RejectsWhatCannotFit) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake::output

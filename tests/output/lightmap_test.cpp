@@ -1,9 +1,9 @@
 // Light maps against the analytic B of a hand-made bake directory (bake_fixture.h): texel
 // values, gutters, unused texels, no NaN or negative values, the irradiance channels, the
 // EXR and PNG files and their page names, and thread-count determinism.
-#include "solve/lightmap.h"
+#include "output/lightmap.h"
 
-#include "bake_fixture.h"
+#include "support/bake_fixture.h"
 #include "core/parallel.h"
 #include "io/exr_writer.h"
 #include "io/png_writer.h"
@@ -15,11 +15,11 @@
 #include <filesystem>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::output {
 namespace {
 
-using testing::ExpectedB;
-using testing::TinyBakeOptions;
+using solve::testing::ExpectedB;
+using solve::testing::TinyBakeOptions;
 
 struct Page {
     uint32_t width = 0, height = 0;
@@ -53,10 +53,10 @@ Page Compute(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent
 class LightMapTest : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = testing::FreshDir("lightmap");
+        dir_ = solve::testing::FreshDir("lightmap");
         opt_.light[0] = {Vec3f(2, 4, 6), Vec3f(1, -2, 3)};  // linear in u
         opt_.light[1] = {Vec3f(3, 3, 3), Vec3f(0, 0, 0)};   // constant
-        testing::WriteTinyBake(dir_, opt_);
+        solve::testing::WriteTinyBake(dir_, opt_);
         view_ = OpenBakeView(dir_);
         atlas_ = PackAtlas(ChartResolutions(view_), {});
     }
@@ -104,7 +104,7 @@ TEST_F(LightMapTest, TexelsEqualAnalyticRadiosity) {
 TEST_F(LightMapTest, NegativeIrradianceClampsToZero) {
     TinyBakeOptions o;
     o.light[0] = {Vec3f(-1, 1, -5), Vec3f(0, 0, 10)};  // n . E < 0 on part of the square
-    testing::WriteTinyBake(dir_, o);
+    solve::testing::WriteTinyBake(dir_, o);
     const BakeView v = OpenBakeView(dir_);
     const Page p = Compute(v, atlas_, 0, MapContent::Radiosity);
     bool saw_zero = false;
@@ -248,7 +248,7 @@ TEST_F(LightMapTest, PagesGetUdimNames) {
 }
 
 TEST_F(LightMapTest, UnsolvedDirectoryIsAUsageError) {
-    std::filesystem::remove(SolutionPath(dir_));
+    std::filesystem::remove(solve::SolutionPath(dir_));
     try {
         OpenBakeView(dir_);
         FAIL() << "expected an error";
@@ -258,4 +258,4 @@ TEST_F(LightMapTest, UnsolvedDirectoryIsAUsageError) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake::output

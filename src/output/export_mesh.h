@@ -16,14 +16,14 @@
 
 #include "io/gltf_writer.h"
 #include "io/mesh_stream.h"
-#include "solve/atlas.h"
-#include "solve/bake_view.h"
-#include "solve/tonemap.h"
+#include "output/atlas.h"
+#include "output/bake_view.h"
+#include "output/tonemap.h"
 
 #include <cstdint>
 #include <string>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 struct MeshExportOptions {
     io::GlbLightMapMode glb_mode = io::GlbLightMapMode::Emissive;
@@ -44,4 +44,4 @@ Vec2f BottomLeftUv(const Atlas& atlas, uint32_t chart, Vec2f uv);
 MeshExportStats WriteBakedMesh(const BakeView& view, const Atlas& atlas, const std::string& path,
                                const MeshExportOptions& options);
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -1,15 +1,15 @@
-#include "solve/export_mesh.h"
+#include "output/export_mesh.h"
 
 #include "core/check.h"
 #include "core/error.h"
 #include "io/mesh_format.h"
-#include "solve/lightmap.h"
+#include "output/lightmap.h"
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
@@ -160,4 +160,4 @@ MeshExportStats WriteBakedMesh(const BakeView& view, const Atlas& atlas, const s
     UsageError("{}: expected a .glb, .ply or .obj file name", path);
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -1,4 +1,4 @@
-#include "solve/render.h"
+#include "output/render.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -13,23 +13,23 @@
 #include <memory>
 #include <numbers>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 namespace {
 
 // Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
 constexpr float kPi = float(std::numbers::pi);
 
-Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
+Vec3f SkyRadiance(const solve::Sky& sky, const Vec3f& dir) {
     switch (sky.type) {
-    case Sky::Type::Uniform:
+    case solve::Sky::Type::Uniform:
         return Vec3f(sky.radiance);
-    case Sky::Type::Overcast: {
+    case solve::Sky::Type::Overcast: {
         // CIE overcast: L(theta) = Lz (1 + 2 cos theta) / 3 above the horizon.
         const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
         return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
     }
-    case Sky::Type::None:
+    case solve::Sky::Type::None:
         break;
     }
     return Vec3f{};
@@ -83,7 +83,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
         shaders[size_t(c)] = std::make_unique<ChartShader>(
             tile, view.solution.fields[size_t(c)], view.solution.radiosity, view.scene, path);
     });
-    VisibilityScene vis;
+    solve::VisibilityScene vis;
     std::vector<uint32_t> geom_chart;
     std::vector<float> xyz;
     std::vector<uint32_t> idx;
@@ -113,8 +113,8 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
     std::vector<uint64_t> row_hits(size_t(cam.height), 0);
     ParallelFor(0, cam.height, [&](int64_t py) {
-        std::vector<Segment> segs(per_row);
-        std::vector<Hit> hits(per_row);
+        std::vector<solve::Segment> segs(per_row);
+        std::vector<solve::Hit> hits(per_row);
         std::vector<Vec3f> dirs(per_row);
         size_t r = 0;
         for (int px = 0; px < cam.width; ++px)
@@ -126,7 +126,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                         forward + right * (x * tan_half * aspect) + cam_up * (y * tan_half);
                     dirs[r] = Vec3f(Normalize(d));
                     segs[r] =
-                        Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
+                        solve::Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
                                 dirs[r].x,        dirs[r].y,        dirs[r].z,        INFINITY};
                 }
         vis.Intersect(segs, hits);
@@ -136,8 +136,8 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
             Vec3f sum{};
             for (int s = 0; s < k * k; ++s) {
                 const size_t i = size_t(px) * size_t(k * k) + size_t(s);
-                const Hit& h = hits[i];
-                if (h.geom_id == kNoHit) {
+                const solve::Hit& h = hits[i];
+                if (h.geom_id == solve::kNoHit) {
                     sum += opt.background ? *opt.background : SkyRadiance(view.scene.sky, dirs[i]);
                     continue;
                 }
@@ -183,4 +183,4 @@ void WriteRenderedImage(const RenderedImage& image, const std::string& path, con
     io::WritePng(path, image.width, image.height, 3, bytes);
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output

@@ -1,4 +1,4 @@
-#include "solve/bake_view.h"
+#include "output/bake_view.h"
 
 #include "core/check.h"
 #include "core/error.h"
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <filesystem>
 
-namespace mebake::solve {
+namespace mebake::output {
 
 BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
     BakeView v;
@@ -17,13 +17,13 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
     if (v.manifest.state != "ingested")
         UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", dir,
                    v.manifest.state);
-    const std::string sol = SolutionPath(dir);
+    const std::string sol = solve::SolutionPath(dir);
     if (!std::filesystem::exists(sol))
         UsageError("{}: not solved yet; run `mebake solve {}` first", dir, dir);
     size_t charts = 0;
     int blocks = 0;
     if (fields == FieldLoading::All) {
-        v.solution = ReadSolution(sol);
+        v.solution = solve::ReadSolution(sol);
         charts = v.solution.fields.size();
         for (const auto& f : v.solution.fields)
             if (f.blocks() != (v.solution.radiosity ? 3 : 9))
@@ -42,7 +42,7 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
         CorruptError({sol}, "{} blocks per node for a {} solution", blocks,
                      v.solution.radiosity ? "radiosity" : "vector irradiance");
     const std::string kept = dir + "/solve/scene.json";
-    v.scene = LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
+    v.scene = solve::LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
     return v;
 }
 
@@ -124,7 +124,7 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     p.normal = Vec3f(n);
     p.material = &scene_.MaterialOf(tile_.material[t]);
     const Vec3f color = colored ? Vec3f(c) : Vec3f(-1, -1, -1);
-    p.albedo = SurfaceAlbedo(*p.material, color);
+    p.albedo = solve::SurfaceAlbedo(*p.material, color);
     return p;
 }
 
@@ -136,7 +136,7 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
         p.uv = u;
         p.normal = Vec3f(0, 0, 1);
         p.material = &default_material_;
-        p.albedo = SurfaceAlbedo(default_material_, Vec3f(-1, -1, -1));
+        p.albedo = solve::SurfaceAlbedo(default_material_, Vec3f(-1, -1, -1));
         return p;
     }
     ShadingPoint p =
@@ -153,12 +153,12 @@ ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     const uint32_t t = vertex_triangle_[v];
     p.material =
         t == stream::kNoTriangle ? &default_material_ : &scene_.MaterialOf(tile_.material[t]);
-    p.albedo = SurfaceAlbedo(*p.material, Color(v));
+    p.albedo = solve::SurfaceAlbedo(*p.material, Color(v));
     return p;
 }
 
 Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
-    Vec3f b = ShadeRadiosity(field_, radiosity_, p.uv.x, p.uv.y, p.normal, p.albedo, *p.material);
+    Vec3f b = solve::ShadeRadiosity(field_, radiosity_, p.uv.x, p.uv.y, p.normal, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(b[c]));
         b[c] = std::max(0.f, b[c]);
@@ -168,7 +168,7 @@ Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
 
 Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
     Vec3f l =
-        ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
+        solve::ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(l[c]));
         l[c] = std::max(0.f, l[c]);
@@ -177,9 +177,9 @@ Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
 }
 
 void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
-    VectorIrradianceAt(field_, radiosity_, uv.x, uv.y, e);
+    solve::VectorIrradianceAt(field_, radiosity_, uv.x, uv.y, e);
     for (int c = 0; c < 3; ++c)
         CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake::output
