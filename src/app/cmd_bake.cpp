@@ -4,6 +4,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/units.h"
 #include "output/bake_job.h"
@@ -136,6 +137,10 @@ int RunBakeInfo(const std::string& dir, bool json) {
         j["total_bytes"] = total_bytes;
         j["solved"] = fs::exists(dir + "/solve/solution.bin");
         j["checkpoint"] = solve::HasCheckpoint(dir);
+        nlohmann::json shares = nlohmann::json::object();
+        for (const MemoryShare& sh : MemoryBudget(m.memory_budget).Shares())
+            shares[sh.name] = sh.bytes;
+        j["memory"] = {{"budget_bytes", m.memory_budget}, {"shares", shares}};
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
@@ -158,6 +163,10 @@ int RunBakeInfo(const std::string& dir, bool json) {
                 (unsigned long long)m.proxy_triangles, m.proxy_deviation);
     std::printf("on disk         %s (tiles %s)\n", FormatBytes(total_bytes).c_str(),
                 FormatBytes(tile_bytes).c_str());
+    std::printf("memory budget   %s at ingest:", FormatBytes(m.memory_budget).c_str());
+    for (const MemoryShare& sh : MemoryBudget(m.memory_budget).Shares())
+        std::printf(" %s %s", sh.name.c_str(), FormatBytes(sh.bytes).c_str());
+    std::printf("\n");
     for (const auto& [k, v] : m.timings)
         std::printf("time %-10s %s\n", k.c_str(), FormatSeconds(v).c_str());
     std::printf("solution        %s\n",

@@ -4,6 +4,7 @@
 #include "core/checksum.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
@@ -109,6 +110,10 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
     ThreadLimit limit(opt.threads);
+    const MemoryBudget budget(opt.memory);
+    // Embree's allocations are capped for this solve (the render and the path tracer that
+    // may follow in the same process build other scenes and set no cap).
+    const EmbreeMemoryCap embree_cap(budget.EmbreeLimit());
     stream::Manifest m = stream::ReadManifest(opt.dir);
     if (m.state != "ingested")
         UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", opt.dir,
@@ -154,7 +159,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     }
 
     // Charts' geometry pyramids, in a memory-mapped file whose resident part stays under
-    // 1/32 of the memory budget beyond the pinned charts (geometry_cache.h): a pass over
+    // the budget's share beyond the pinned charts (geometry_cache.h): a pass over
     // the charts faults evicted pyramids back from the page cache, which costs far less
     // than the pyramids' memory. Tiles are read a batch at a time. Without room on disk
     // for the file, the pyramids stay in memory (the same bytes, so the same solution).
@@ -189,7 +194,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
                 charts[c].geometry = cache->View(c);
     };
     try {
-        geometry = std::make_unique<GeometryCache>(opt.dir + "/solve", opt.memory / 32);
+        geometry = std::make_unique<GeometryCache>(opt.dir + "/solve", budget.GeometryPyramids());
         load_charts(geometry.get());
     } catch (const Error& e) {
         if (e.kind() != ErrorKind::Io)
@@ -339,6 +344,10 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["leaves"] = st.leaves;
     j["field_bytes"] = st.field_bytes;
     j["embree_bytes"] = EmbreePeakMemoryBytes();
+    nlohmann::json shares = nlohmann::json::array();
+    for (const MemoryShare& sh : MemoryBudget(opt.memory).Shares())
+        shares.push_back({{"name", sh.name}, {"bytes", sh.bytes}, {"rule", sh.rule}});
+    j["memory"] = {{"budget_bytes", opt.memory}, {"shares", shares}};
     if (geometry) {
         const GeometryCache::Stats gs = geometry->stats();
         j["geometry"] = {{"file_bytes", geometry->file_bytes()},

@@ -94,7 +94,10 @@ void ThrowIfError(const char* what) {
     std::string msg = t_last_error.empty() ? ErrorName(e) : t_last_error;
     t_last_error.clear();
     if (e == RTC_ERROR_OUT_OF_MEMORY && g_limit.load() > 0)
-        msg += fmt::format(" [Embree memory limit {} bytes]", g_limit.load());
+        msg += fmt::format(" [Embree memory limit {} bytes, 1/8 of --memory; the visibility "
+                           "mesh was sized at ingest: a larger --memory, or ingest again with "
+                           "this one]",
+                           g_limit.load());
     throw Error(ErrorKind::Io, fmt::format("Embree: {} failed: {}", what, msg));
 }
 
@@ -477,6 +480,13 @@ int64_t EmbreePeakMemoryBytes() {
 }
 void SetEmbreeMemoryLimit(int64_t bytes) {
     g_limit.store(std::max<int64_t>(bytes, 0));
+}
+
+EmbreeMemoryCap::EmbreeMemoryCap(uint64_t bytes) : previous_(g_limit.load()) {
+    SetEmbreeMemoryLimit(int64_t(bytes));
+}
+EmbreeMemoryCap::~EmbreeMemoryCap() {
+    SetEmbreeMemoryLimit(previous_);
 }
 
 }  // namespace mebake::solve

@@ -114,4 +114,16 @@ int64_t EmbreePeakMemoryBytes();
 // (0 = no limit). Meant for the caller's memory budget (docs/architecture.md, Memory).
 void SetEmbreeMemoryLimit(int64_t bytes);
 
+// Sets the limit for its lifetime and restores the previous one.
+class EmbreeMemoryCap {
+public:
+    explicit EmbreeMemoryCap(uint64_t bytes);
+    ~EmbreeMemoryCap();
+    EmbreeMemoryCap(const EmbreeMemoryCap&) = delete;
+    EmbreeMemoryCap& operator=(const EmbreeMemoryCap&) = delete;
+
+private:
+    int64_t previous_;
+};
+
 }  // namespace mebake::solve

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
@@ -70,8 +71,9 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
     uint64_t total = 0;
     for (uint64_t n : brick_triangles)
         total += n;
-    const uint64_t full_budget = FullMeshTriangleBudget(m->memory_budget);
-    const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(m->memory_budget), 1);
+    const uint64_t visibility = MemoryBudget(m->memory_budget).Visibility();
+    const uint64_t full_budget = FullMeshTriangleBudget(visibility);
+    const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(visibility), 1);
     const double diag = Length(m->bbox_max - m->bbox_min);
     // One brick's part of the full repaired mesh, as pass 3 spilled it (empty if none).
     auto source = [&](uint32_t b) {
@@ -137,6 +139,7 @@ Manifest Ingest(const IngestOptions& opt) {
     ThreadLimit limit(opt.threads);
     Manifest m;
     m.memory_budget = opt.memory;
+    const MemoryBudget budget(opt.memory);
     m.max_distortion = opt.max_distortion;
 
     // Pass 1: spill.
@@ -145,7 +148,7 @@ Manifest Ingest(const IngestOptions& opt) {
     {
         // Scoped: the spill's page caches are freed before the passes that follow.
         // Appends only: a few pages per file are enough to write in large blocks.
-        Spill spill(dir, std::min<uint64_t>(opt.memory / 8, uint64_t(12) << 20));
+        Spill spill(dir, budget.SpillCache());
         for (const auto& path : opt.inputs) {
             auto in = io::InputStream::Open(path);
             io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
@@ -183,11 +186,11 @@ Manifest Ingest(const IngestOptions& opt) {
     auto t1 = Clock::now();
     BinOptions bopt;
     bopt.max_faces = std::clamp<uint64_t>(
-        opt.memory / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
+        budget.Bricks() / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
     // Caches no larger than the files they cache (small meshes need little memory).
     const uint64_t spilled_bytes = sr.vertex_count * 16 + sr.face_count * 16;
     bopt.cache_bytes = std::min<uint64_t>(
-        {opt.memory / 8, uint64_t(64) << 20, 4 * spilled_bytes + (uint64_t(4) << 20)});
+        budget.BinningCache(), 4 * spilled_bytes + (uint64_t(4) << 20));
     BrickPlan plan = BinFaces(dir, sr, bopt);
     m.brick_faces = bopt.max_faces;
     m.brick_count = uint32_t(plan.bricks.size());

@@ -33,19 +33,19 @@
 
 namespace mebake::stream {
 
-// The solver's Embree scene may take 1/16 of the memory budget. Embree's peak cost per
-// triangle, measured (solve --stats embree_bytes, mkscan spheres): the full mesh 55 B
-// (55.4 MB for 1M, 219 MB for 4M), a clustered proxy 88-101 B (86.9 MB for 986K, 72.6 MB
-// for 721K; its triangles are less regular), so 100 B. At the default 1 GiB: the full
-// mesh up to 1.2M triangles, else a proxy of at most 670K.
-inline constexpr uint64_t kVisibilityShare = 16;
+// The solver's Embree scene must fit the budget's visibility share
+// (core/memory_budget.h). Embree's peak cost per triangle, measured (solve --stats
+// embree_bytes, mkscan spheres): the full mesh 55 B (55.4 MB for 1M, 219 MB for 4M), a
+// clustered proxy 88-101 B (86.9 MB for 986K, 72.6 MB for 721K; its triangles are less
+// regular), so 100 B. At the default 1 GiB: the full mesh up to 1.2M triangles, else a
+// proxy of at most 670K.
 inline constexpr uint64_t kEmbreeBytesPerTriangle = 56;
 inline constexpr uint64_t kEmbreeBytesPerProxyTriangle = 100;
-inline uint64_t FullMeshTriangleBudget(uint64_t memory_budget) {
-    return memory_budget / kVisibilityShare / kEmbreeBytesPerTriangle;
+inline uint64_t FullMeshTriangleBudget(uint64_t visibility_bytes) {
+    return visibility_bytes / kEmbreeBytesPerTriangle;
 }
-inline uint64_t ProxyTriangleBudget(uint64_t memory_budget) {
-    return memory_budget / kVisibilityShare / kEmbreeBytesPerProxyTriangle;
+inline uint64_t ProxyTriangleBudget(uint64_t visibility_bytes) {
+    return visibility_bytes / kEmbreeBytesPerProxyTriangle;
 }
 
 struct ProxyMesh {

@@ -5,6 +5,7 @@
 // simplifies with the same bytes for 1 and 2 threads, a large one keeps the full mesh.
 #include "stream/proxy_cluster.h"
 
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "io/chunk_file.h"
 #include "stream/ingest.h"
@@ -304,7 +305,7 @@ TEST(ProxyIngest, SmallBudgetSimplifiesCrackFreeAndDeterministic) {
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_a").string();
     const std::string b = (fs::temp_directory_path() / "mebake_proxy_b").string();
     const uint64_t memory = uint64_t(16) << 20;  // full 18724 triangles, proxy 10485; 8 bricks
-    const uint64_t budget = ProxyTriangleBudget(memory);
+    const uint64_t budget = ProxyTriangleBudget(MemoryBudget(memory).Visibility());
     const Manifest ma = IngestSphere(obj, a, 2, memory);
     IngestSphere(obj, b, 1, memory);
     ASSERT_GT(ma.brick_count, 2u) << "the test needs brick borders";

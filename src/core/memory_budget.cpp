@@ -1,0 +1,44 @@
+#include "core/memory_budget.h"
+
+#include <algorithm>
+
+namespace mebake {
+
+namespace {
+constexpr uint64_t kMiB = uint64_t(1) << 20;
+}
+
+uint64_t MemoryBudget::SpillCache() const {
+    return std::min<uint64_t>(total_ / 8, 12 * kMiB);
+}
+
+uint64_t MemoryBudget::BinningCache() const {
+    return std::min<uint64_t>(total_ / 8, 64 * kMiB);
+}
+
+uint64_t MemoryBudget::Bricks() const {
+    return total_;
+}
+
+uint64_t MemoryBudget::Visibility() const {
+    return total_ / 16;
+}
+
+uint64_t MemoryBudget::GeometryPyramids() const {
+    return total_ / 32;
+}
+
+uint64_t MemoryBudget::EmbreeLimit() const {
+    return 2 * Visibility();
+}
+
+std::vector<MemoryShare> MemoryBudget::Shares() const {
+    return {{"ingest.spill_cache", SpillCache(), "min(1/8, 12 MiB)"},
+            {"ingest.binning_cache", BinningCache(), "min(1/8, 64 MiB, 4x spilled data)"},
+            {"ingest.bricks", Bricks(), "all (two bricks in flight, 2000 B per triangle)"},
+            {"solve.visibility", Visibility(), "1/16 (Embree scene, sized at ingest)"},
+            {"solve.embree_limit", EmbreeLimit(), "2x visibility (hard cap)"},
+            {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"}};
+}
+
+}  // namespace mebake

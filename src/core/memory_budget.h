@@ -1,0 +1,50 @@
+// The one memory budget (`--memory`), made once from the option and handed to every stage.
+// Each stage takes its share by name; the fractions live here and nowhere else, so what a
+// budget buys can be read (and printed: Shares()) in one place. Stages run one after the
+// other, so shares of different stages may add up to more than the whole; shares used at
+// the same time (the solve's visibility and geometry pyramids) do not.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mebake {
+
+struct MemoryShare {
+    std::string name;   // stage.pool
+    uint64_t bytes = 0;
+    std::string rule;   // how it is derived from the budget
+};
+
+class MemoryBudget {
+public:
+    explicit MemoryBudget(uint64_t total_bytes) : total_(total_bytes) {}
+    uint64_t total() const { return total_; }
+
+    // Ingest pass 1: page cache of the spill's append-only files. A few pages per file
+    // write in large blocks; more buys nothing.
+    uint64_t SpillCache() const;
+    // Ingest pass 2: page cache of vertex look-ups while faces are binned (the caller also
+    // caps it at a few times the spilled data, so small meshes take little).
+    uint64_t BinningCache() const;
+    // Ingest pass 3: the bricks in core (repair, charts, parameterization). Pass 3 runs
+    // alone, so it may take the whole budget; the brick size follows from it.
+    uint64_t Bricks() const;
+    // Solve: the Embree scene of the visibility mesh (the full mesh, or a clustered proxy
+    // sized to fit this share at ingest).
+    uint64_t Visibility() const;
+    // Solve: the geometry pyramids resident beyond the charts pinned by the threads.
+    uint64_t GeometryPyramids() const;
+    // Solve: a hard cap on Embree's own allocations (its memory monitor). Twice the
+    // visibility share: the share sizes the scene, the cap catches a scene far off it
+    // (built for a larger budget) with a clear error instead of swapping.
+    uint64_t EmbreeLimit() const;
+
+    std::vector<MemoryShare> Shares() const;
+
+private:
+    uint64_t total_;
+};
+
+}  // namespace mebake
