@@ -34,6 +34,9 @@ struct ChartBuildOptions {
     // to -35% (lucy). Charts over max_distortion are still split.
     int refine_iterations = 8;             // local/global iterations of the parameterization
     int lloyd_iterations = 4;              // segmentation passes before the first bound check
+    // Merge neighbouring charts while their union still parameterizes within the rule
+    // (chart_merge.h).
+    bool merge_charts = true;
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 

@@ -1,0 +1,50 @@
+// Merging neighbouring charts after segmentation, so that charts are as large as the
+// parameterization rule allows. The segmentation's normal-cone bound and its fold rule are
+// cheap stand-ins for "this piece flattens well"; on scans they cut far more often than the
+// flattening needs (lucy: 4 seeds, 353 inserted for the cone). Here two neighbouring charts
+// become one when their union is a disc whose parameterization (parameterize.h) passes the
+// same test a chart must pass anyway (no flips, coarse Jacobian deviation within the
+// bound), with a mean Jacobian deviation within MergeOptions::max_mean_deviation.
+#pragma once
+
+#include "stream/parameterize.h"
+#include "stream/trimesh.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mebake::stream {
+
+struct MergeOptions {
+    ParamOptions param;                 // the flattening each union must pass
+    double max_mean_deviation = 0.01;   // jacobian_deviation_mean of a union (the seed's 1 %)
+    double max_virtual_fraction = 0.7;  // of a union's square: keeps merged charts compact
+    uint32_t max_chart_vertices = 50000;
+    // Largest square side in 3D units (ParamChart::scale): the light map's largest chart
+    // resolution times the texel size, so that a union never loses light-map texels.
+    double max_scale = 1e300;
+    // A border that is mostly fold (faces meeting at more than this angle) is a real edge
+    // of the shape: the charts on both sides stay apart.
+    double fold_deg = 70;
+    double max_fold_fraction = 0.5;  // of the shared border's length
+    int max_rounds = 64;             // each round merges a matching of pairs
+};
+
+struct MergeReport {
+    size_t charts_before = 0;
+    size_t charts_after = 0;
+    size_t rounds = 0;
+    size_t tried = 0;     // unions parameterized
+    size_t accepted = 0;  // = charts_before - charts_after
+    size_t rejected_fold = 0;  // pairs never tried: their border is mostly fold
+};
+
+// chart_of: chart id per triangle of `mesh` (ids 0..n-1, every chart a disc, as
+// SegmentCharts makes them). Rewrites it with merged charts, renumbered by smallest
+// triangle index. Deterministic for any thread count (pairs are chosen in a fixed order,
+// unions are parameterized in parallel, results applied in that order).
+MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
+                        std::vector<uint32_t>* chart_of);
+
+}  // namespace mebake::stream
