@@ -221,9 +221,12 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         MergeOptions mopt;
         mopt.param = popt;
         mopt.max_chart_vertices = opt.max_chart_vertices;
-        // ResolutionFor rounds up from want / sqrt(2): below this the chart keeps every
-        // light-map texel it asks for.
-        mopt.max_scale = opt.max_resolution * std::sqrt(2.0) * opt.texel_size;
+        // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
+        // square of at most twice the geometry image's resolution (and never more than
+        // max_resolution, so it keeps every light-map texel it asks for).
+        const uint32_t merged_res =
+            std::min(opt.max_resolution, 2 * opt.max_geometry_resolution);
+        mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
         mreport = MergeCharts(mesh, mopt, &chart_of);
     }
 

@@ -25,8 +25,11 @@ struct ChartBuildOptions {
     uint32_t min_resolution = 4;  // light-map texels per chart side, powers of two
     uint32_t max_resolution = 2048;
     // The geometry image the solver samples is at most this fine; the light map itself
-    // is evaluated from the triangles at the chart's full resolution by export.
-    uint32_t max_geometry_resolution = 128;
+    // is evaluated from the triangles at the chart's full resolution by export. Merged
+    // charts are kept to squares of at most twice this resolution (chart_merge.h), so a
+    // geometry texel spans at most 2 x 2 light-map texels there (128 before merging made
+    // charts large: lucy's 2048-texel charts had 16 x 16 light-map texels per sample).
+    uint32_t max_geometry_resolution = 512;
     double max_distortion = 0.05;  // split charts whose Jacobian deviation is above
     uint32_t max_chart_vertices = 50000;
     // Cheaper than the library defaults (16 and 6). Measured: mean area distortion bunny
