@@ -217,31 +217,48 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     popt.max_jacobian_deviation = opt.max_distortion;
     popt.refine_options.max_iterations = opt.refine_iterations;
     MergeReport mreport;
+    std::vector<ChartParam> merged_params;  // per chart after merging, when computed
     if (opt.merge_charts) {
         MergeOptions mopt;
         mopt.param = popt;
         mopt.max_chart_vertices = opt.max_chart_vertices;
         // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
-        // square of at most twice the geometry image's resolution (and never more than
+        // square of at most max_merged_resolution texels (and never more than
         // max_resolution, so it keeps every light-map texel it asks for).
-        const uint32_t merged_res =
-            std::min(opt.max_resolution, 2 * opt.max_geometry_resolution);
+        const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
         mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
-        mreport = MergeCharts(mesh, mopt, &chart_of);
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params);
     }
 
     // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
     // in two and both halves go back to the front of the queue, so the order stays fixed.
-    std::deque<std::pair<TriMesh, int>> queue;
-    for (TriMesh& chart : ExtractCharts(mesh, chart_of))
-        queue.emplace_back(std::move(chart), 0);
+    // A chart straight from the merge comes with its parameterization (the same bits
+    // ParameterizeChart would give here).
+    struct Pending {
+        TriMesh chart;
+        int depth = 0;
+        ChartParam param;
+    };
+    std::deque<Pending> queue;
+    {
+        std::vector<TriMesh> charts = ExtractCharts(mesh, chart_of);
+        for (size_t c = 0; c < charts.size(); ++c) {
+            queue.push_back({std::move(charts[c]), 0, {}});
+            if (merged_params.size() == charts.size())
+                queue.back().param = std::move(merged_params[c]);
+        }
+    }
     clock.Lap(kSegment);
     while (!queue.empty()) {
-        auto [chart, depth] = std::move(queue.front());
+        Pending item = std::move(queue.front());
         queue.pop_front();
+        TriMesh& chart = item.chart;
+        const int depth = item.depth;
         if (chart.triangles.empty())
             continue;
-        ChartParam param = ParameterizeChart(chart, popt);
+        ChartParam param = item.param.status != ParamStatus::kEmpty
+                               ? std::move(item.param)
+                               : ParameterizeChart(chart, popt);
         clock.Lap(kParameterize);
         const bool can_split = chart.triangles.size() > 1 && depth < 24;
         if (param.status != ParamStatus::kOk && can_split &&
@@ -257,7 +274,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
                             : param.status == ParamStatus::kFlipped ? 1
                             : param.status == ParamStatus::kNotDisc ? 2 : 3];
                 for (uint32_t p = parts; p-- > 0;)
-                    queue.emplace_front(ExtractChart(chart, half, p), depth + 1);
+                    queue.push_front({ExtractChart(chart, half, p), depth + 1, {}});
                 clock.Lap(kSegment);
                 continue;
             }

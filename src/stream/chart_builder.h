@@ -25,11 +25,18 @@ struct ChartBuildOptions {
     uint32_t min_resolution = 4;  // light-map texels per chart side, powers of two
     uint32_t max_resolution = 2048;
     // The geometry image the solver samples is at most this fine; the light map itself
-    // is evaluated from the triangles at the chart's full resolution by export. Merged
-    // charts are kept to squares of at most twice this resolution (chart_merge.h), so a
-    // geometry texel spans at most 2 x 2 light-map texels there (128 before merging made
-    // charts large: lucy's 2048-texel charts had 16 x 16 light-map texels per sample).
+    // is evaluated from the triangles at the chart's full resolution by export. As large
+    // as the largest merged chart, so merged charts keep one geometry sample per
+    // light-map texel (it was 128 when charts were small; merging made lucy's squares up
+    // to 2048 texels, 16 x 16 light-map texels per sample at 128).
     uint32_t max_geometry_resolution = 512;
+    // Merged charts' squares are at most this many texels a side (chart_merge.h). The
+    // solver's per-chart budgets (8192 quadtree nodes, an 8 x 8 horizon-normal field,
+    // 32 x 32 emitter samples; solve/solver.h) are sized for charts up to about this
+    // large: with 1024-texel charts the bunny's error against the path tracer went from
+    // 2.50 % to 6.74 % (4 charts, node budget exhausted). Charts the segmentation makes
+    // larger are left as they are.
+    uint32_t max_merged_resolution = 512;
     double max_distortion = 0.05;  // split charts whose Jacobian deviation is above
     uint32_t max_chart_vertices = 50000;
     // Cheaper than the library defaults (16 and 6). Measured: mean area distortion bunny

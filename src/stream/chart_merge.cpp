@@ -146,20 +146,34 @@ TriMesh Union(const TriMesh& mesh, const std::vector<uint32_t>& fa,
     return out;
 }
 
-bool Passes(const TriMesh& piece, const MergeOptions& o) {
+// A chart's parameterization, and the area of the square it needs (scale^2, in 3D
+// units), or -1 when the chart fails the test.
+struct Trial {
+    ChartParam param;
+    double square = -1;
+};
+
+Trial Try(const TriMesh& piece, const MergeOptions& o) {
+    Trial t;
     if (piece.vertex_count() > o.max_chart_vertices)
-        return false;
-    const ChartParam p = ParameterizeChart(piece, o.param);
-    return p.status == ParamStatus::kOk && p.metrics.flipped == 0 && p.scale <= o.max_scale &&
-           p.metrics.jacobian_deviation_mean <= o.max_mean_deviation &&
-           p.metrics.virtual_fraction <= o.max_virtual_fraction;
+        return t;
+    t.param = ParameterizeChart(piece, o.param);
+    const ChartParam& p = t.param;
+    const bool ok = p.status == ParamStatus::kOk && p.metrics.flipped == 0 &&
+                    p.scale <= o.max_scale &&
+                    p.metrics.jacobian_deviation_mean <= o.max_mean_deviation;
+    if (ok)
+        t.square = p.scale * p.scale;
+    return t;
 }
 
 }  // namespace
 
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
-                        std::vector<uint32_t>* chart_of) {
+                        std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params) {
     std::vector<uint32_t>& chart = *chart_of;
+    if (params)
+        params->clear();
     CHECK_EQ(chart.size(), mesh.triangle_count());
     MergeReport report;
     size_t chart_count = 0;
@@ -175,17 +189,42 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         faces_of[chart[f]].push_back(f);
     std::set<std::pair<uint32_t, uint32_t>> rejected;
     bool fold_counted = false;
+    std::vector<double> area(chart_count, 0);
+    for (uint32_t f = 0; f < chart.size(); ++f)
+        area[chart[f]] += g.area[f];
+    const double fill = 1 - 2 * options.param.margin;
+    const double max_area = options.max_scale * options.max_scale * fill * fill;
+    // Each chart's own parameterization and square; a chart that fails on its own (the
+    // builder splits it) is left alone.
+    auto try_union = [&](const std::vector<uint32_t>& fa, const std::vector<uint32_t>& fb) {
+        thread_local std::vector<uint32_t> local_of;
+        if (local_of.size() < mesh.vertex_count())
+            local_of.assign(mesh.vertex_count(), kNoIndex);
+        return Try(Union(mesh, fa, fb, local_of), options);
+    };
+    std::vector<Trial> live(chart_count);
+    ParallelFor(0, int64_t(chart_count), [&](int64_t c) {
+        live[size_t(c)] = try_union(faces_of[size_t(c)], {});
+    });
+    std::vector<double> square(chart_count);
+    for (size_t c = 0; c < chart_count; ++c)
+        square[c] = live[c].square;
+    const double growth = options.max_square_growth;
 
     for (int round = 0; round < options.max_rounds; ++round) {
         const std::vector<Border> borders = Borders(mesh, g, chart, chart_count, fold_cos);
         std::vector<uint8_t> matched(chart_count, 0);
         std::vector<Border> picked;
         for (const Border& e : borders) {
+            // The union's uv area is at most (1 - 2 margin)^2, so its square holds at
+            // least its 3D area divided by that: over max_scale^2 it cannot pass.
+            if (area[e.a] + area[e.b] > max_area)
+                continue;
             if (e.fold > options.max_fold_fraction * e.length) {
                 report.rejected_fold += !fold_counted;
                 continue;
             }
-            if (matched[e.a] || matched[e.b])
+            if (matched[e.a] || matched[e.b] || square[e.a] < 0 || square[e.b] < 0)
                 continue;
             if (rejected.count({e.a, e.b}))
                 continue;
@@ -197,18 +236,15 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
             break;
         ++report.rounds;
         report.tried += picked.size();
-        std::vector<uint8_t> pass(picked.size(), 0);
+        std::vector<Trial> united(picked.size());
         ParallelFor(0, int64_t(picked.size()), [&](int64_t i) {
             const Border& e = picked[size_t(i)];
-            thread_local std::vector<uint32_t> local_of;
-            if (local_of.size() < mesh.vertex_count())
-                local_of.assign(mesh.vertex_count(), kNoIndex);
-            pass[size_t(i)] =
-                Passes(Union(mesh, faces_of[e.a], faces_of[e.b], local_of), options);
+            united[size_t(i)] = try_union(faces_of[e.a], faces_of[e.b]);
         });
         for (size_t i = 0; i < picked.size(); ++i) {
             const Border& e = picked[i];
-            if (!pass[i]) {
+            const double sq = united[i].square;
+            if (sq < 0 || sq > (1 + growth) * (square[e.a] + square[e.b])) {
                 rejected.insert({e.a, e.b});
                 continue;
             }
@@ -217,6 +253,11 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
             faces_of[e.a].insert(faces_of[e.a].end(), faces_of[e.b].begin(), faces_of[e.b].end());
             std::sort(faces_of[e.a].begin(), faces_of[e.a].end());
             std::vector<uint32_t>().swap(faces_of[e.b]);
+            square[e.a] = sq;
+            live[e.a] = std::move(united[i]);
+            live[e.b] = Trial{};
+            area[e.a] += area[e.b];
+            square[e.b] = -1;
             ++report.accepted;
         }
     }
@@ -224,8 +265,11 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     std::vector<uint32_t> remap(chart_count, kNoIndex);
     uint32_t next = 0;
     for (uint32_t& c : chart) {
-        if (remap[c] == kNoIndex)
+        if (remap[c] == kNoIndex) {
             remap[c] = next++;
+            if (params)
+                params->push_back(std::move(live[c].param));
+        }
         c = remap[c];
     }
     report.charts_after = next;

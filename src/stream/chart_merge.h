@@ -19,7 +19,10 @@ namespace mebake::stream {
 struct MergeOptions {
     ParamOptions param;                 // the flattening each union must pass
     double max_mean_deviation = 0.01;   // jacobian_deviation_mean of a union (the seed's 1 %)
-    double max_virtual_fraction = 0.7;  // of a union's square: keeps merged charts compact
+    // A union's square (in 3D area) may exceed its two charts' squares together by this
+    // fraction at most: merging must not make the light map larger (an L-shaped union
+    // wastes most of its square).
+    double max_square_growth = 0.25;
     uint32_t max_chart_vertices = 50000;
     // Largest square side in 3D units (ParamChart::scale): the light map's largest chart
     // resolution times the texel size, so that a union never loses light-map texels.
@@ -43,8 +46,13 @@ struct MergeReport {
 // chart_of: chart id per triangle of `mesh` (ids 0..n-1, every chart a disc, as
 // SegmentCharts makes them). Rewrites it with merged charts, renumbered by smallest
 // triangle index. Deterministic for any thread count (pairs are chosen in a fixed order,
-// unions are parameterized in parallel, results applied in that order).
+// unions are parameterized in parallel, results applied in that order). If params is
+// given and there were at least two charts, (*params)[c] receives final chart c's
+// ParameterizeChart(ExtractCharts(mesh, *chart_of)[c], options.param) (status kEmpty
+// where it was never computed: a chart over the vertex bound), so the caller need not
+// compute it again.
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
-                        std::vector<uint32_t>* chart_of);
+                        std::vector<uint32_t>* chart_of,
+                        std::vector<ChartParam>* params = nullptr);
 
 }  // namespace mebake::stream
