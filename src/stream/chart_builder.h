@@ -25,17 +25,15 @@ struct ChartBuildOptions {
     uint32_t min_resolution = 4;  // light-map texels per chart side, powers of two
     uint32_t max_resolution = 2048;
     // The geometry image the solver samples is at most this fine; the light map itself
-    // is evaluated from the triangles at the chart's full resolution by export. As large
-    // as the largest merged chart, so merged charts keep one geometry sample per
-    // light-map texel (it was 128 when charts were small; merging made lucy's squares up
-    // to 2048 texels, 16 x 16 light-map texels per sample at 128).
-    uint32_t max_geometry_resolution = 512;
-    // Merged charts' squares are at most this many texels a side (chart_merge.h). The
-    // solver's per-chart budgets (8192 quadtree nodes, an 8 x 8 horizon-normal field,
-    // 32 x 32 emitter samples; solve/solver.h) are sized for charts up to about this
-    // large: with 1024-texel charts the bunny's error against the path tracer went from
-    // 2.50 % to 6.74 % (4 charts, node budget exhausted). Charts the segmentation makes
-    // larger are left as they are.
+    // is evaluated from the triangles at the chart's full resolution by export. Merged
+    // charts did not need more: on the bunny (15 charts of up to 512 texels) 512 instead
+    // of 128 gave the same error against the path tracer (3.43 % / 3.44 %) and a slower
+    // solve (21.8 s against 11.8 s, loaded 2-core machine).
+    uint32_t max_geometry_resolution = 128;
+    // Merged charts' squares are at most this many texels a side (chart_merge.h), the
+    // largest the segmentation made before merging on the shared scans: the solver's
+    // per-chart budgets (8192 quadtree nodes, 32 x 32 emitter samples; solve/solver.h)
+    // were tuned on such charts (1024-texel charts: bunny 6.74 % against 2.50 %).
     uint32_t max_merged_resolution = 512;
     double max_distortion = 0.05;  // split charts whose Jacobian deviation is above
     uint32_t max_chart_vertices = 50000;

@@ -153,6 +153,84 @@ struct Trial {
     double square = -1;
 };
 
+// Face normals times twice the face area, averaged face -> vertex -> face a few times
+// (as the segmentation does, segment.cpp): a scan's noise is not curvature.
+std::vector<Vec3d> SmoothFaceNormals(const TriMesh& piece) {
+    const size_t nf = piece.triangle_count();
+    std::vector<Vec3d> face(nf), vertex(piece.vertex_count());
+    std::vector<double> twice_area(nf);
+    for (size_t f = 0; f < nf; ++f) {
+        const Tri& t = piece.triangles[f];
+        const Vec3d a(piece.position[t[0]]);
+        face[f] = Cross(Vec3d(piece.position[t[1]]) - a, Vec3d(piece.position[t[2]]) - a);
+        twice_area[f] = Length(face[f]);
+    }
+    for (int pass = 0; pass < 3; ++pass) {
+        std::fill(vertex.begin(), vertex.end(), Vec3d());
+        for (size_t f = 0; f < nf; ++f)
+            for (uint32_t v : piece.triangles[f])
+                vertex[v] += face[f];
+        for (size_t f = 0; f < nf; ++f) {
+            const Tri& t = piece.triangles[f];
+            face[f] = Normalize(vertex[t[0]] + vertex[t[1]] + vertex[t[2]]) * twice_area[f];
+        }
+    }
+    return face;
+}
+
+// How far the surface turns inside the cells of an 8 x 8 grid over the chart's square,
+// in degrees: the 95 % area quantile of the angle between the mean normal of each cell of
+// a finer grid and that of the 8 x 8 cell holding it. The solver takes a point's horizon
+// (light below it does not count) from the 8 x 8 level of the chart's geometry pyramid
+// (solve/solver.cpp, HorizonNormal): on a chart that turns a lot inside one such cell the
+// horizon tilts away from the surface and lit points go dark (the bunny's ear tip at 85 %
+// error in one merged chart). The finer grid is 32 x 32, or coarser so that its cells hold
+// about 4 triangles each: a scan's noise is not curvature, and where the 8 x 8 cells hold
+// only a few triangles the horizon follows the surface anyway (spread 0).
+double CellSpread(const TriMesh& piece, const std::vector<Vec2f>& uv, double fill) {
+    constexpr int kCoarse = 8;
+    constexpr double kPerCell = 4;  // triangles per fine cell
+    int nf = 32;
+    while (nf > kCoarse && double(piece.triangle_count()) < kPerCell * nf * nf * fill)
+        nf /= 2;
+    if (nf <= kCoarse)
+        return 0;
+    const int ratio = nf / kCoarse;
+    const std::vector<Vec3d> normal = SmoothFaceNormals(piece);
+    std::vector<Vec3d> fine(size_t(nf * nf)), coarse(kCoarse * kCoarse);
+    for (size_t f = 0; f < piece.triangle_count(); ++f) {
+        const Tri& t = piece.triangles[f];
+        const Vec3d n = normal[f];
+        const double cx = (double(uv[t[0]].x) + uv[t[1]].x + uv[t[2]].x) / 3;
+        const double cy = (double(uv[t[0]].y) + uv[t[1]].y + uv[t[2]].y) / 3;
+        const int ix = std::clamp(int(cx * nf), 0, nf - 1);
+        const int iy = std::clamp(int(cy * nf), 0, nf - 1);
+        fine[size_t(iy * nf + ix)] += n;  // |n| = twice the area: area-weighted
+        coarse[size_t((iy / ratio) * kCoarse + ix / ratio)] += n;
+    }
+    std::vector<std::pair<double, double>> angle_area;
+    double total = 0;
+    for (int iy = 0; iy < nf; ++iy)
+        for (int ix = 0; ix < nf; ++ix) {
+            const Vec3d& f = fine[size_t(iy * nf + ix)];
+            const Vec3d& c = coarse[size_t((iy / ratio) * kCoarse + ix / ratio)];
+            const double w = Length(f);
+            if (!(w > 0) || !(Length(c) > 0))
+                continue;
+            const double cosine = std::clamp(Dot(Normalize(f), Normalize(c)), -1.0, 1.0);
+            angle_area.emplace_back(std::acos(cosine) * 180 / kPi, w);
+            total += w;
+        }
+    std::sort(angle_area.begin(), angle_area.end());
+    double acc = 0;
+    for (const auto& [angle, w] : angle_area) {
+        acc += w;
+        if (acc >= 0.95 * total)
+            return angle;
+    }
+    return 0;
+}
+
 Trial Try(const TriMesh& piece, const MergeOptions& o) {
     Trial t;
     if (piece.vertex_count() > o.max_chart_vertices)
@@ -161,7 +239,8 @@ Trial Try(const TriMesh& piece, const MergeOptions& o) {
     const ChartParam& p = t.param;
     const bool ok = p.status == ParamStatus::kOk && p.metrics.flipped == 0 &&
                     p.scale <= o.max_scale &&
-                    p.metrics.jacobian_deviation_mean <= o.max_mean_deviation;
+                    p.metrics.jacobian_deviation_mean <= o.max_mean_deviation &&
+                    CellSpread(piece, p.uv, 1 - p.metrics.virtual_fraction) <= o.max_cell_spread_deg;
     if (ok)
         t.square = p.scale * p.scale;
     return t;

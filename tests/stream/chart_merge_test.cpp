@@ -59,7 +59,17 @@ TEST(ChartMerge, FlatBlocksBecomeOneChart) {
     const TriMesh m = Grid(32, [](double, double) { return 0.0; });
     std::vector<uint32_t> chart = Blocks(32, 4);
     ASSERT_EQ(Count(chart), 16u);
-    const MergeReport r = MergeCharts(m, MergeOptions{}, &chart);
+    // Two square blocks make a 2:1 rectangle, whose square is twice theirs together: by
+    // default that union is refused (the light map would grow) ...
+    std::vector<uint32_t> kept = chart;
+    const MergeReport none = MergeCharts(m, MergeOptions{}, &kept);
+    EXPECT_EQ(none.charts_after, 16u);
+    EXPECT_GT(none.tried, 0u);
+    EXPECT_EQ(kept, chart);
+    // ... and allowed when the square may double; then rectangles pair up into squares.
+    MergeOptions o;
+    o.max_square_growth = 1;
+    const MergeReport r = MergeCharts(m, o, &chart);
     EXPECT_EQ(r.charts_before, 16u);
     EXPECT_EQ(r.charts_after, 1u);
     EXPECT_EQ(r.accepted, 15u);
@@ -92,6 +102,7 @@ TEST(ChartMerge, SquareSizeBoundsUnions) {
     const TriMesh m = Grid(32, [](double, double) { return 0.0; });
     std::vector<uint32_t> chart = Blocks(32, 4);
     MergeOptions o;
+    o.max_square_growth = 1;
     // A block's square is about 0.25 / (1 - 2 margin) on a side; two blocks need more.
     o.max_scale = 0.3;
     EXPECT_EQ(MergeCharts(m, o, &chart).charts_after, 16u);
@@ -110,9 +121,10 @@ TEST(ChartMerge, FoldsStayApart) {
     EXPECT_EQ(r.charts_after, 6u);
     EXPECT_EQ(r.tried, 0u);
     EXPECT_EQ(r.rejected_fold, 12u);
-    // Without the fold rule two sides do merge.
+    // Without the fold rule two sides do merge (into an L whose square is twice theirs).
     MergeOptions any;
     any.fold_deg = 180;
+    any.max_square_growth = 1;
     EXPECT_LT(MergeCharts(box, any, &chart).charts_after, 6u);
 }
 
@@ -158,6 +170,32 @@ TEST(ChartMerge, SphereChartsStayDiscsAndAreDeterministic) {
     EXPECT_GE(r.charts_after, 2u);
     EXPECT_LT(r.charts_after, Count(segmented) / 2);
     ExpectCharts(m, one, MergeOptions{});
+}
+
+TEST(ChartMerge, TurningInsideHorizonCellsBoundsUnions) {
+    // A half cylinder of radius 1 and length 2 in 8 strips along its axis (22.5 degrees
+    // each). Unions are developable; what grows is how far the surface turns inside one
+    // of the 8 x 8 cells of the union's square: about 3 degrees for one strip, 14 for two,
+    // 22 for all eight.
+    const int n = 64;
+    TriMesh m = Grid(n, [](double, double) { return 0.0; });
+    for (Vec3f& p : m.position) {
+        const double a = M_PI * p.x;
+        p = Vec3f(float(std::cos(a)), float(2 * p.y), float(std::sin(a)));
+    }
+    std::vector<uint32_t> strips;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            for (int t = 0; t < 2; ++t)
+                strips.push_back(uint32_t(i * 8 / n));
+    MergeOptions o;
+    o.max_square_growth = 1;
+    std::vector<uint32_t> loose = strips, tight = strips;
+    EXPECT_LT(MergeCharts(m, o, &loose).charts_after, 3u);
+    o.max_cell_spread_deg = 5;
+    const MergeReport r = MergeCharts(m, o, &tight);
+    EXPECT_EQ(r.charts_after, 8u);
+    EXPECT_GT(r.tried, 0u);
 }
 
 TEST(ChartMerge, OneChartOrNone) {
