@@ -26,10 +26,10 @@ struct MergeOptions {
     uint32_t max_chart_vertices = 50000;
     // How far a union's surface may turn inside one cell of an 8 x 8 grid over its square
     // (degrees; chart_merge.cpp, CellSpread): the solver's horizons come from that grid.
-    // Measured on the bunny against the path tracer (same points): no bound, 15 charts,
-    // 3.43 % RMS (max 83 % at an ear tip); 40 degrees, 15 charts, 2.82 %; 25 degrees,
-    // 25 charts, 2.58 %; unmerged 37 charts, 2.50 %.
-    double max_cell_spread_deg = 25;
+    // Measured on the bunny against the path tracer (the same 1959 points, M2): no bound,
+    // 15 charts, 3.43 % RMS (max 83 %, at an ear tip); 25 degrees, 23 charts, 2.64 %;
+    // 20 degrees, 28 charts, 2.55 %; unmerged, 37 charts, 2.50 %.
+    double max_cell_spread_deg = 20;
     // Largest square side in 3D units (ParamChart::scale): the light map's largest chart
     // resolution times the texel size, so that a union never loses light-map texels.
     double max_scale = 1e300;
