@@ -246,6 +246,62 @@ Trial Try(const TriMesh& piece, const MergeOptions& o) {
     return t;
 }
 
+// The charts as they merge: faces, areas, each live chart's flattening and square.
+struct MergeState {
+    const TriMesh& mesh;
+    const MergeOptions& options;
+    std::vector<uint32_t>& chart;
+    std::vector<std::vector<uint32_t>> faces_of;
+    std::vector<double> area;
+    std::vector<Trial> live;                           // square < 0: never merged
+    std::set<std::pair<uint32_t, uint32_t>> rejected;  // pairs tried once and failed
+
+    Trial TryUnion(const std::vector<uint32_t>& fa, const std::vector<uint32_t>& fb) const {
+        thread_local std::vector<uint32_t> local_of;
+        if (local_of.size() < mesh.vertex_count())
+            local_of.assign(mesh.vertex_count(), kNoIndex);
+        return Try(Union(mesh, fa, fb, local_of), options);
+    }
+
+    // A matching from the ranked borders: each chart in at most one pair, pairs that cannot
+    // pass (too large, mostly fold, already failed, a chart that fails on its own) left out.
+    std::vector<Border> Pick(const std::vector<Border>& borders, size_t* folds) const {
+        // The union's uv area is at most (1 - 2 margin)^2, so its square holds at least
+        // its 3D area divided by that: over max_scale^2 it cannot pass.
+        const double fill = 1 - 2 * options.param.margin;
+        const double max_area = options.max_scale * options.max_scale * fill * fill;
+        std::vector<uint8_t> matched(faces_of.size(), 0);
+        std::vector<Border> picked;
+        for (const Border& e : borders) {
+            if (area[e.a] + area[e.b] > max_area)
+                continue;
+            if (e.fold > options.max_fold_fraction * e.length) {
+                ++*folds;
+                continue;
+            }
+            if (matched[e.a] || matched[e.b] || live[e.a].square < 0 || live[e.b].square < 0 ||
+                rejected.count({e.a, e.b}))
+                continue;
+            matched[e.a] = matched[e.b] = 1;
+            picked.push_back(e);
+        }
+        return picked;
+    }
+
+    // Chart b joins chart a, which takes the union's flattening.
+    void Join(uint32_t a, uint32_t b, Trial united) {
+        for (uint32_t f : faces_of[b])
+            chart[f] = a;
+        faces_of[a].insert(faces_of[a].end(), faces_of[b].begin(), faces_of[b].end());
+        std::sort(faces_of[a].begin(), faces_of[a].end());
+        std::vector<uint32_t>().swap(faces_of[b]);
+        live[a] = std::move(united);
+        live[b] = Trial{};
+        area[a] += area[b];
+        area[b] = 0;
+    }
+};
+
 }  // namespace
 
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
@@ -263,54 +319,26 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         return report;
     const Geometry g = Measure(mesh);
     const double fold_cos = std::cos(options.fold_deg * kPi / 180);
-    std::vector<std::vector<uint32_t>> faces_of(chart_count);
-    for (uint32_t f = 0; f < chart.size(); ++f)
-        faces_of[chart[f]].push_back(f);
-    std::set<std::pair<uint32_t, uint32_t>> rejected;
-    bool fold_counted = false;
-    std::vector<double> area(chart_count, 0);
-    for (uint32_t f = 0; f < chart.size(); ++f)
-        area[chart[f]] += g.area[f];
-    const double fill = 1 - 2 * options.param.margin;
-    const double max_area = options.max_scale * options.max_scale * fill * fill;
-    // Each chart's own parameterization and square; a chart that fails on its own (the
-    // builder splits it) is left alone.
-    auto try_union = [&](const std::vector<uint32_t>& fa, const std::vector<uint32_t>& fb) {
-        thread_local std::vector<uint32_t> local_of;
-        if (local_of.size() < mesh.vertex_count())
-            local_of.assign(mesh.vertex_count(), kNoIndex);
-        return Try(Union(mesh, fa, fb, local_of), options);
-    };
-    std::vector<Trial> live(chart_count);
+    MergeState st{mesh, options, chart, {}, {}, {}, {}};
+    st.faces_of.resize(chart_count);
+    st.area.assign(chart_count, 0);
+    for (uint32_t f = 0; f < chart.size(); ++f) {
+        st.faces_of[chart[f]].push_back(f);
+        st.area[chart[f]] += g.area[f];
+    }
+    // Each chart's own flattening and square; a chart that fails on its own (the builder
+    // splits it) is left alone.
+    st.live.resize(chart_count);
     ParallelFor(0, int64_t(chart_count), [&](int64_t c) {
-        live[size_t(c)] = try_union(faces_of[size_t(c)], {});
+        st.live[size_t(c)] = st.TryUnion(st.faces_of[size_t(c)], {});
     });
-    std::vector<double> square(chart_count);
-    for (size_t c = 0; c < chart_count; ++c)
-        square[c] = live[c].square;
-    const double growth = options.max_square_growth;
 
     for (int round = 0; round < options.max_rounds; ++round) {
-        const std::vector<Border> borders = Borders(mesh, g, chart, chart_count, fold_cos);
-        std::vector<uint8_t> matched(chart_count, 0);
-        std::vector<Border> picked;
-        for (const Border& e : borders) {
-            // The union's uv area is at most (1 - 2 margin)^2, so its square holds at
-            // least its 3D area divided by that: over max_scale^2 it cannot pass.
-            if (area[e.a] + area[e.b] > max_area)
-                continue;
-            if (e.fold > options.max_fold_fraction * e.length) {
-                report.rejected_fold += !fold_counted;
-                continue;
-            }
-            if (matched[e.a] || matched[e.b] || square[e.a] < 0 || square[e.b] < 0)
-                continue;
-            if (rejected.count({e.a, e.b}))
-                continue;
-            matched[e.a] = matched[e.b] = 1;
-            picked.push_back(e);
-        }
-        fold_counted = true;
+        size_t folds = 0;
+        const std::vector<Border> picked =
+            st.Pick(Borders(mesh, g, chart, chart_count, fold_cos), &folds);
+        if (round == 0)
+            report.rejected_fold = folds;
         if (picked.empty())
             break;
         ++report.rounds;
@@ -318,25 +346,17 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         std::vector<Trial> united(picked.size());
         ParallelFor(0, int64_t(picked.size()), [&](int64_t i) {
             const Border& e = picked[size_t(i)];
-            united[size_t(i)] = try_union(faces_of[e.a], faces_of[e.b]);
+            united[size_t(i)] = st.TryUnion(st.faces_of[e.a], st.faces_of[e.b]);
         });
         for (size_t i = 0; i < picked.size(); ++i) {
             const Border& e = picked[i];
             const double sq = united[i].square;
-            if (sq < 0 || sq > (1 + growth) * (square[e.a] + square[e.b])) {
-                rejected.insert({e.a, e.b});
+            const double parts = st.live[e.a].square + st.live[e.b].square;
+            if (sq < 0 || sq > (1 + options.max_square_growth) * parts) {
+                st.rejected.insert({e.a, e.b});
                 continue;
             }
-            for (uint32_t f : faces_of[e.b])
-                chart[f] = e.a;
-            faces_of[e.a].insert(faces_of[e.a].end(), faces_of[e.b].begin(), faces_of[e.b].end());
-            std::sort(faces_of[e.a].begin(), faces_of[e.a].end());
-            std::vector<uint32_t>().swap(faces_of[e.b]);
-            square[e.a] = sq;
-            live[e.a] = std::move(united[i]);
-            live[e.b] = Trial{};
-            area[e.a] += area[e.b];
-            square[e.b] = -1;
+            st.Join(e.a, e.b, std::move(united[i]));
             ++report.accepted;
         }
     }
@@ -347,7 +367,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         if (remap[c] == kNoIndex) {
             remap[c] = next++;
             if (params)
-                params->push_back(std::move(live[c].param));
+                params->push_back(std::move(st.live[c].param));
         }
         c = remap[c];
     }
