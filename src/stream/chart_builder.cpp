@@ -222,6 +222,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         MergeOptions mopt;
         mopt.param = popt;
         mopt.max_chart_vertices = opt.max_chart_vertices;
+        mopt.max_union_triangles = sopt.target_chart_faces;
         // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
         // square of at most max_merged_resolution texels (and never more than
         // max_resolution, so it keeps every light-map texel it asks for).

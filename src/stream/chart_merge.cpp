@@ -264,7 +264,8 @@ struct MergeState {
     }
 
     // A matching from the ranked borders: each chart in at most one pair, pairs that cannot
-    // pass (too large, mostly fold, already failed, a chart that fails on its own) left out.
+    // pass or are not worth trying (too large, mostly fold, already failed, a chart that
+    // fails on its own) left out.
     std::vector<Border> Pick(const std::vector<Border>& borders, size_t* folds) const {
         // The union's uv area is at most (1 - 2 margin)^2, so its square holds at least
         // its 3D area divided by that: over max_scale^2 it cannot pass.
@@ -273,7 +274,8 @@ struct MergeState {
         std::vector<uint8_t> matched(faces_of.size(), 0);
         std::vector<Border> picked;
         for (const Border& e : borders) {
-            if (area[e.a] + area[e.b] > max_area)
+            if (area[e.a] + area[e.b] > max_area ||
+                faces_of[e.a].size() + faces_of[e.b].size() > options.max_union_triangles)
                 continue;
             if (e.fold > options.max_fold_fraction * e.length) {
                 ++*folds;

@@ -24,6 +24,11 @@ struct MergeOptions {
     // wastes most of its square).
     double max_square_growth = 0.25;
     uint32_t max_chart_vertices = 50000;
+    // Unions of more triangles are not tried: charts that size are no longer what makes
+    // the chart count high, and flattening them is what merging costs (the 1M sphere's
+    // 27K-triangle charts merged into 18 cost 10 CPU-s of ingest, more than the solve
+    // gained). The chart builder passes the segmentation's target chart size.
+    uint32_t max_union_triangles = 30000;
     // How far a union's surface may turn inside one cell of an 8 x 8 grid over its square
     // (degrees; chart_merge.cpp, CellSpread): the solver's horizons come from that grid.
     // Measured on the bunny against the path tracer (the same 1959 points, M2): no bound,
