@@ -2,10 +2,12 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "core/paged_file.h"
 #include "core/parallel.h"
 #include "stream/bricks.h"
 #include "stream/chart_grid.h"
+#include "stream/chart_merge.h"
 #include "stream/parameterize.h"
 #include "stream/segment.h"
 #include "stream/spill.h"
@@ -208,23 +210,56 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     SegmentOptions sopt;
     sopt.max_chart_vertices = opt.max_chart_vertices;
     sopt.lloyd_iterations = opt.lloyd_iterations;
-    std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, nullptr);
-
-    // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
-    // in two and both halves go back to the front of the queue, so the order stays fixed.
-    std::deque<std::pair<TriMesh, int>> queue;
-    for (TriMesh& chart : ExtractCharts(mesh, chart_of))
-        queue.emplace_back(std::move(chart), 0);
+    SegmentReport sreport;
+    std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, &sreport);
+    uint64_t split_for[4] = {};  // distorted, flipped, not a disc, other
     ParamOptions popt;
     popt.max_jacobian_deviation = opt.max_distortion;
     popt.refine_options.max_iterations = opt.refine_iterations;
+    MergeReport mreport;
+    std::vector<ChartParam> merged_params;  // per chart after merging, when computed
+    if (opt.merge_charts) {
+        MergeOptions mopt;
+        mopt.param = popt;
+        mopt.max_chart_vertices = opt.max_chart_vertices;
+        mopt.max_union_triangles = sopt.target_chart_faces;
+        // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
+        // square of at most max_merged_resolution texels (and never more than
+        // max_resolution, so it keeps every light-map texel it asks for).
+        const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
+        mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params);
+    }
+
+    // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
+    // in two and both halves go back to the front of the queue, so the order stays fixed.
+    // A chart straight from the merge comes with its parameterization (the same bits
+    // ParameterizeChart would give here).
+    struct Pending {
+        TriMesh chart;
+        int depth = 0;
+        ChartParam param;
+    };
+    std::deque<Pending> queue;
+    {
+        std::vector<TriMesh> charts = ExtractCharts(mesh, chart_of);
+        for (size_t c = 0; c < charts.size(); ++c) {
+            queue.push_back({std::move(charts[c]), 0, {}});
+            if (merged_params.size() == charts.size())
+                queue.back().param = std::move(merged_params[c]);
+        }
+    }
     clock.Lap(kSegment);
     while (!queue.empty()) {
-        auto [chart, depth] = std::move(queue.front());
+        Pending item = std::move(queue.front());
         queue.pop_front();
+        TriMesh& chart = item.chart;
+        const int depth = item.depth;
         if (chart.triangles.empty())
             continue;
-        ChartParam param = ParameterizeChart(chart, popt);
+        ChartParam param = item.param.status != ParamStatus::kEmpty
+                               ? std::move(item.param)
+                               : ParameterizeChart(chart, popt);
         clock.Lap(kParameterize);
         const bool can_split = chart.triangles.size() > 1 && depth < 24;
         if (param.status != ParamStatus::kOk && can_split &&
@@ -236,8 +271,11 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
                 parts = std::max(parts, h + 1);
             if (parts >= 2) {
                 ++out.splits;
+                ++split_for[param.status == ParamStatus::kDistorted ? 0
+                            : param.status == ParamStatus::kFlipped ? 1
+                            : param.status == ParamStatus::kNotDisc ? 2 : 3];
                 for (uint32_t p = parts; p-- > 0;)
-                    queue.emplace_front(ExtractChart(chart, half, p), depth + 1);
+                    queue.push_front({ExtractChart(chart, half, p), depth + 1, {}});
                 clock.Lap(kSegment);
                 continue;
             }
@@ -309,6 +347,18 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         rec.bbox_max = m.bbox_max;
         out.charts.push_back(rec);
     }
+    // Where the charts come from (mebake -v): seeds, what the segmentation inserted,
+    // split and merged, and what the parameterization split again.
+    spdlog::debug("brick {}: {} faces, {} components: {} seeds + {} inserted (deviation or "
+                  "size) + {} leftovers, {} disc splits, {} small merged -> {} charts; "
+                  "{} rounds merged {} of {} pairs tried ({} borders mostly fold) -> {} charts; "
+                  "parameterization splits: {} distorted, {} flipped, {} not a disc, {} other "
+                  "-> {} charts",
+                  brick, mesh.triangles.size(), sreport.components, sreport.initial_seeds,
+                  sreport.inserted_seeds, sreport.leftover_charts, sreport.split_charts,
+                  sreport.merged_charts, sreport.charts, mreport.rounds, mreport.accepted,
+                  mreport.tried, mreport.rejected_fold, mreport.charts_after, split_for[0],
+                  split_for[1], split_for[2], split_for[3], out.charts.size());
     return out;
 }
 
