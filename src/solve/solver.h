@@ -102,7 +102,10 @@ public:
 
 private:
     struct Emitter;
+    class DirectSampler;  // refine_direct.cpp
     void RefineDirect(uint32_t chart);
+    void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level);
+    void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
     double UnshotPower(uint32_t chart, bool first_shot) const;

@@ -1,0 +1,281 @@
+// Solver::RefineDirect: one chart's direct light (polygon lights and small emitters, then
+// the sky) fitted node by node in its quadtree (seed 000, adaptive subdivision). Three
+// steps: DirectSampler evaluates the light at a node's Gauss points and control grid,
+// FitDirectLights refines where a node's polynomial misses its control points (largest
+// integrated error first, within the chart's node budget), GatherSky adds the sky at a
+// fixed level and pushes it down.
+#include "solve/solver.h"
+
+#include "core/check.h"
+#include "core/log.h"
+#include "solve/direct.h"
+#include "solve/rays.h"
+#include "solve/shading.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <queue>
+
+namespace mebake::solve {
+
+namespace {
+
+// Nodes this many levels above the light-map texel or finer share light visibility between
+// their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
+// what the light map cannot hold anyway.
+constexpr int kCoherentLevels = 3;
+
+float MaxAbs(const std::vector<float>& v) {
+    float m = 0;
+    for (float x : v)
+        m = std::max(m, std::abs(x));
+    return m;
+}
+
+}  // namespace
+
+// Field values of the direct light at a node's ng x ng Gauss points (gauss_vals) and, with
+// control, at its gc x gc control grid (ctrl_vals): E (9 blocks) or B = rho (n.E)+ (3
+// blocks). All points go to the direct light in one call; on small nodes the four outermost
+// points are its probes (visibility shared across the node, DirectLight::Evaluate).
+class Solver::DirectSampler {
+public:
+    DirectSampler(const Solver& solver, const SolveChart& sc, int order, int max_level,
+                  DirectLight& direct)
+        : solver_(solver), sc_(sc), ng_(order + 1), gc_(order + 2),
+          finest_(sc.geometry.finest_level()), max_level_(max_level), direct_(direct) {}
+
+    void Evaluate(const QuadNode& node, bool control) {
+        const int gl = std::min(finest_, int(node.level) + 2);
+        const int n_gauss = ng_ * ng_, n_ctrl = control ? gc_ * gc_ : 0;
+        const size_t probes = OrderPoints(node, control, n_gauss, n_ctrl);
+        SamplePoints(node, gl, n_gauss, probes);
+        e9_all_.assign(all_pts_.size() * 9, 0.f);
+        if (direct_.has_lights())
+            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_,
+                             keys_);
+        ToGaussAndControl(n_gauss, n_ctrl, control);
+    }
+
+    std::vector<float> gauss_vals, ctrl_vals;
+
+private:
+    // Chart coordinates of point idx: Gauss points 0..n_gauss-1, then the control grid.
+    std::pair<float, float> Uv(const QuadNode& node, int idx, int n_gauss) const {
+        double s, t, w;
+        if (idx < n_gauss) {
+            GaussPoint2D(ng_, idx, &s, &t, &w);
+        } else {
+            s = ControlPoint(gc_, (idx - n_gauss) % gc_);
+            t = ControlPoint(gc_, (idx - n_gauss) / gc_);
+        }
+        return std::make_pair(float(node.U(s)), float(node.V(t)));
+    }
+
+    // slot_: evaluation order -> point index, probes first (the control grid's corners, or
+    // the Gauss grid's). Returns the number of probes.
+    size_t OrderPoints(const QuadNode& node, bool control, int n_gauss, int n_ctrl) {
+        slot_.clear();
+        const bool coherent = int(node.level) + kCoherentLevels >= max_level_ && ng_ > 1;
+        if (coherent) {
+            if (control) {
+                for (int c : {0, gc_ - 1, gc_ * (gc_ - 1), gc_ * gc_ - 1})
+                    slot_.push_back(n_gauss + c);
+            } else {
+                for (int c : {0, ng_ - 1, ng_ * (ng_ - 1), ng_ * ng_ - 1})
+                    slot_.push_back(c);
+            }
+        }
+        const size_t probes = slot_.size();
+        for (int k = 0; k < n_gauss + n_ctrl; ++k)
+            if (std::find(slot_.begin(), slot_.begin() + std::ptrdiff_t(probes), k) ==
+                slot_.begin() + std::ptrdiff_t(probes))
+                slot_.push_back(k);
+        return probes;
+    }
+
+    // Surface points and albedos in slot_ order, and the probes' cache keys.
+    void SamplePoints(const QuadNode& node, int gl, int n_gauss, size_t probes) {
+        all_pts_.resize(slot_.size());
+        all_albedo_.resize(slot_.size());
+        for (size_t k = 0; k < slot_.size(); ++k) {
+            const auto [u, v] = Uv(node, slot_[k], n_gauss);
+            auto smp = SampleBilinear(sc_.geometry, gl, u, v);
+            all_pts_[k] = ReceiverPoint{smp.position, smp.normal,
+                                        VisPoint(sc_, gl, u, v, smp), HorizonNormal(sc_, u, v)};
+            all_albedo_[k] = solver_.Albedo(smp.material, smp.color);
+        }
+        keys_.resize(probes);
+        for (size_t k = 0; k < probes; ++k) {
+            const auto [u, v] = Uv(node, slot_[k], n_gauss);
+            keys_[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl)};
+        }
+    }
+
+    // Back to Gauss and control order, then to field values.
+    void ToGaussAndControl(int n_gauss, int n_ctrl, bool control) {
+        pts_.resize(size_t(n_gauss));
+        albedo_.resize(size_t(n_gauss));
+        e9_.assign(size_t(n_gauss) * 9, 0.f);
+        cpts_.assign(size_t(n_ctrl), ReceiverPoint{});
+        calb_.assign(size_t(n_ctrl), Vec3f{});
+        ce9_.assign(size_t(n_ctrl) * 9, 0.f);
+        for (size_t k = 0; k < slot_.size(); ++k) {
+            const int idx = slot_[k];
+            const float* src = &e9_all_[k * 9];
+            if (idx < n_gauss) {
+                pts_[size_t(idx)] = all_pts_[k];
+                albedo_[size_t(idx)] = all_albedo_[k];
+                std::copy(src, src + 9, &e9_[size_t(idx) * 9]);
+            } else {
+                const size_t c = size_t(idx - n_gauss);
+                cpts_[c] = all_pts_[k];
+                calb_[c] = all_albedo_[k];
+                std::copy(src, src + 9, &ce9_[c * 9]);
+            }
+        }
+        const bool radiosity = solver_.opt_.settings.radiosity;
+        ToFieldValues(pts_, albedo_, e9_, radiosity, &gauss_vals);
+        if (control)
+            ToFieldValues(cpts_, calb_, ce9_, radiosity, &ctrl_vals);
+    }
+
+    const Solver& solver_;
+    const SolveChart& sc_;
+    const int ng_, gc_, finest_, max_level_;
+    DirectLight& direct_;
+    ProbeCache probe_cache_;  // this chart's probes (node corners are shared)
+    std::vector<int> slot_;
+    std::vector<ProbeKey> keys_;
+    std::vector<ReceiverPoint> all_pts_, pts_, cpts_;
+    std::vector<Vec3f> all_albedo_, albedo_, calb_;
+    std::vector<float> e9_all_, e9_, ce9_;
+};
+
+void Solver::RefineDirect(uint32_t chart) {
+    const SolveChart& sc = charts_[chart];
+    const GeometryPin pin = sc.geometry.Pin();
+    const int order = fields_[chart].order();
+    // A node's polynomial holds (M+1)^2 values per block: a node narrower than M+1 texels
+    // describes more than the light map can store, so refinement stops there.
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
+    DirectLight direct(scene_, opt_.settings, vis_, RayOffset(chart), opt_.scene_size);
+    // The fixed levels (min_level, sky_level) are meant for a chart as large as the scene: a
+    // chart 2^k times smaller starts k levels higher, so that node counts follow world size
+    // (lucy's 449 small charts made a million nodes at M0 otherwise).
+    const int size_levels =
+        std::min(0, int(std::ceil(std::log2(std::max(sc.scale, 1e-30) /
+                                            std::max(double(opt_.scene_size), 1e-30)))));
+    // Lower orders need finer nodes for the same smooth field (E turns with the surface):
+    // a constant over a node covering 20 degrees of a sphere is off by 2%, which an albedo
+    // of 0.9 amplifies ninefold. Nodes above min_level are split without a test.
+    const int min_level =
+        std::max(0, opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0) + size_levels);
+
+    DirectSampler sampler(*this, sc, order, max_level, direct);
+    FitDirectLights(chart, sampler, min_level, max_level);
+    spdlog::debug("chart {}: direct light refined to {} nodes (depth cap {})", chart,
+                  fields_[chart].node_count(), max_level);
+    if (direct.has_sky())
+        GatherSky(chart, direct, std::min(max_level, std::max(0, opt_.sky_level + size_levels)));
+}
+
+// Every node gets its fit when it is made; nodes whose fit misses the control points wait
+// in a queue ordered by integrated error (error x area), largest first, ties by node index
+// (deterministic). When the chart's node budget runs out, the worst places have been
+// refined and every node still holds its own fit: the budget degrades the whole chart
+// evenly instead of leaving the last quadrants of a depth-first walk at the root's
+// resolution.
+void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level,
+                             int max_level) {
+    ChartField& field = fields_[chart];
+    const int order = field.order(), blocks = field.blocks();
+    const int ng = order + 1, gc = order + 2;
+    std::vector<float> coeffs(size_t(field.stride()));
+    struct Candidate {
+        float priority;
+        size_t node;
+        bool operator<(const Candidate& o) const {
+            return priority != o.priority ? priority < o.priority : node > o.node;
+        }
+    };
+    std::priority_queue<Candidate> queue;
+    std::vector<size_t> stack;
+    auto fit = [&](size_t n) {
+        const QuadNode node = field.node(n);
+        if (int(node.level) < std::min(min_level, max_level)) {
+            stack.push_back(n);
+            return;
+        }
+        const bool control = int(node.level) < max_level;
+        sampler.Evaluate(node, control);
+        float scale = MaxAbs(sampler.gauss_vals);
+        ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+        std::copy(coeffs.begin(), coeffs.end(), field.value(n));
+        std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
+        if (!control)
+            return;
+        scale = std::max({scale, MaxAbs(sampler.ctrl_vals), float(reference_ * 0.02)});
+        const float err =
+            ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        if (err > float(opt_.settings.tolerance) * scale)
+            queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
+    };
+    fit(0);
+    while (!stack.empty()) {
+        const size_t n = stack.back();
+        stack.pop_back();
+        const int32_t first = field.Subdivide(n);
+        for (int c = 3; c >= 0; --c)
+            fit(size_t(first + c));
+    }
+    while (!queue.empty() && field.node_count() + 4 <= opt_.max_nodes_per_chart) {
+        const size_t n = queue.top().node;
+        queue.pop();
+        const int32_t first = field.Subdivide(n);
+        for (int c = 0; c < 4; ++c)
+            fit(size_t(first + c));
+        CHECK(stack.empty());
+    }
+    field.Pull();
+}
+
+// The sky is smooth lighting sampled by discrete directions: its quadrature steps are not
+// detail worth refining for. It is gathered at sky_level (or the leaves above it) and
+// pushed down, like indirect light.
+void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level) {
+    const SolveChart& sc = charts_[chart];
+    ChartField& field = fields_[chart];
+    const int order = field.order(), blocks = field.blocks(), ng = order + 1;
+    std::vector<size_t> targets, stack(1, 0);
+    while (!stack.empty()) {
+        size_t n = stack.back();
+        stack.pop_back();
+        const QuadNode& node = field.node(n);
+        if (node.leaf() || int(node.level) >= sky_level) {
+            targets.push_back(n);
+            continue;
+        }
+        for (int c = 3; c >= 0; --c)
+            stack.push_back(size_t(node.first_child + c));
+    }
+    std::vector<ReceiverPoint> pts;
+    std::vector<Vec3f> albedo;
+    std::vector<float> e9, vals, coeffs(size_t(field.stride()));
+    for (size_t n : targets) {
+        const QuadNode node = field.node(n);
+        GaussPoints(sc, node, ng, true, &pts, &albedo);
+        e9.assign(pts.size() * 9, 0.f);
+        direct.Evaluate(pts, e9, DirectLight::kSky);
+        ToFieldValues(pts, albedo, e9, opt_.settings.radiosity, &vals);
+        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
+        float* pend = field.pending(n);
+        for (int k = 0; k < field.stride(); ++k)
+            pend[k] += coeffs[size_t(k)];
+    }
+    field.PushPending();
+}
+
+}  // namespace mebake::solve
