@@ -7,6 +7,7 @@
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
+#include "solve/transfer.h"
 #include "solve/visibility.h"
 
 #include <algorithm>
@@ -232,155 +233,58 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
     return p;
 }
 
-void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
-    const SolveChart& sc = charts_[receiver];
-    const GeometryPin pin = sc.geometry.Pin();
-    ChartField& field = fields_[receiver];
-    const int order = field.order(), blocks = field.blocks(), ng = order + 1;
-    // A constant (M0) receiver node holds one E for its whole area, while the E of a source
-    // turns and falls off across it by ~ its size / distance (higher orders hold the linear
-    // part). M0 gathers at nodes 4x smaller against their distance: at tau 0.5 the furnace
-    // lost 0.36% per bounce, 3% at albedo 0.9.
-    const double receiver_tau = order == 0 ? 0.25 * opt_.receiver_tau : opt_.receiver_tau;
-    const int finest = sc.geometry.finest_level();
-    const bool radiosity = opt_.settings.radiosity;
-    const float eps = RayOffset(receiver);
-    // Links whose irradiance bound is below this are evaluated where they stand.
-    const double negligible = 1e-3 * opt_.settings.tolerance * reference_;
+// One receiver chart's gather from a batch of emitters: link refinement (hierarchical
+// radiosity) picks pairs (receiver node, emitter region) at a suitable scale, and each link
+// is evaluated at the node's Gauss points from the region's texels, with one visibility
+// ray per point and texel; the projection goes to the node's pending coefficients.
+class Solver::Gatherer {
+public:
+    Gatherer(Solver& solver, uint32_t receiver)
+        : s_(solver), sc_(solver.charts_[receiver]), pin_(sc_.geometry.Pin()),
+          field_(solver.fields_[receiver]), order_(field_.order()), ng_(order_ + 1),
+          finest_(sc_.geometry.finest_level()), eps_(solver.RayOffset(receiver)),
+          coeffs_(size_t(field_.stride())) {
+        // A constant (M0) receiver node holds one E for its whole area, while the E of a
+        // source turns and falls off across it by ~ its size / distance (higher orders hold
+        // the linear part). M0 gathers at nodes 4x smaller against their distance: at tau
+        // 0.5 the furnace lost 0.36% per bounce, 3% at albedo 0.9.
+        receiver_tau_ = order_ == 0 ? 0.25 * s_.opt_.receiver_tau : s_.opt_.receiver_tau;
+        // Links whose irradiance bound is below this are evaluated where they stand.
+        negligible_ = 1e-3 * s_.opt_.settings.tolerance * s_.reference_;
+    }
 
-    struct Pair {
-        uint32_t point;
-        uint32_t texel;
-        Vec3f contribution;  // E per unit radiosity of the texel
-    };
-    std::vector<ReceiverPoint> pts;
-    std::vector<Vec3f> albedo;
-    std::vector<Pair> pairs;
-    std::vector<float> e9, vals, coeffs(size_t(field.stride()));
-    SegmentBatch batch;
-
-    // Receiver node bounds from the geometry pyramid.
-    auto node_bounds = [&](const QuadNode& node, Vec3f* center, float* radius) {
-        if (int(node.level) <= finest) {
-            const auto& g = sc.geometry.At(node.level, node.i, node.j);
-            *center = g.position;
-            *radius = g.radius;
-        } else {
-            auto smp = SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
-            *center = smp.position;
-            *radius = float(sc.scale * node.size() * 0.75);
-        }
-    };
-
-    // Evaluates one link: the emitter texels at level `ls` inside region (l, i, j), at the
-    // receiver node's Gauss points; adds the projection to the node's pending set.
-    auto evaluate_link = [&](size_t n, const Emitter& em, int l, uint32_t ri, uint32_t rj, int ls) {
-        const QuadNode node = field.node(n);
-        GaussPoints(sc, node, ng, false, &pts, &albedo);
-        const auto& texels = em.levels[size_t(ls)];
-        const uint32_t span = 1u << (ls - l), row = 1u << ls;
-        const double texel_side = em.scale / double(row);
-        pairs.clear();
-        batch.Clear();
-        for (uint32_t p = 0; p < pts.size(); ++p) {
-            const ReceiverPoint& rp = pts[p];
-            const Vec3f org = rp.vis_point + rp.normal * eps;
-            for (uint32_t b = 0; b < span; ++b) {
-                for (uint32_t a = 0; a < span; ++a) {
-                    const uint32_t k = (rj * span + b) * row + ri * span + a;
-                    const auto& t = texels[k];
-                    if (t.area <= 0 || t.db_max <= 0)
-                        continue;
-                    const Vec3d d = Vec3d(t.pos) - Vec3d(rp.position);
-                    const double r2 = Dot(d, d);
-                    if (r2 < 1e-20)
-                        continue;
-                    if (Dot(d, Vec3d(rp.normal)) <= 0)
-                        continue;  // below the receiver's horizon
-                    const double ce = -Dot(d, Vec3d(t.nrm));
-                    if (ce <= 0)
-                        continue;  // emitter faces away
-                    Vec3d contrib;
-                    if (r2 < 4 * texel_side * texel_side) {
-                        // Near field: the texel as a uniform square, in closed form.
-                        const Vec3f nz = t.nrm;
-                        const Vec3f ref = std::abs(nz.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
-                        const Vec3f tu = Normalize(Cross(ref, nz)), tv = Cross(nz, tu);
-                        const double h = 0.5 * std::sqrt(double(t.area));
-                        const Vec3d c(t.pos), au(tu), av(tv);
-                        const Vec3d quad[4] = {c - au * h - av * h, c + au * h - av * h,
-                                               c + au * h + av * h, c - au * h + av * h};
-                        auto clipped = ClipToHalfSpace(quad, Vec3d(rp.position), Vec3d(rp.normal));
-                        if (clipped.size() < 3)
-                            continue;
-                        contrib =
-                            VectorIrradiance(clipped, 1.0 / std::numbers::pi, Vec3d(rp.position));
-                    } else {
-                        contrib = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
-                    }
-                    pairs.push_back({p, k, Vec3f(contrib)});
-                    batch.AddSegment(org, t.vis + t.nrm * eps);
-                }
-            }
-        }
-        if (pairs.empty())
-            return;
-        batch.Trace(vis_, RayKind::kLink);
-        e9.assign(pts.size() * 9, 0.f);
-        for (size_t q = 0; q < pairs.size(); ++q) {
-            if (batch.occluded[q])
-                continue;
-            const Pair& pr = pairs[q];
-            const Vec3f& db = texels[pr.texel].db;
-            for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k)
-                    e9[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
-        }
-        ToFieldValues(pts, albedo, e9, radiosity, &vals);
-        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
-        float* pend = field.pending(n);
-        for (int k = 0; k < field.stride(); ++k)
-            pend[k] += coeffs[size_t(k)];
-    };
-
-    // Link refinement (hierarchical radiosity): a pair (receiver node, emitter region) is
-    // evaluated when both are small against their distance, or when its irradiance bound
-    // is negligible; otherwise the larger side is subdivided.
-    struct Link {
-        uint32_t node;
-        int level;
-        uint32_t i, j;
-    };
-    std::vector<Link> stack;
-    for (const Emitter& em : emitters) {
+    // A pair (receiver node, emitter region) is evaluated when both are small against
+    // their distance, or when its irradiance bound is negligible; otherwise the larger side
+    // is subdivided.
+    void Shoot(const Emitter& em) {
         const int top = int(em.levels.size()) - 1;
-        stack.assign(1, Link{0, 0, 0, 0});
+        std::vector<Link> stack(1, Link{0, 0, 0, 0});
         while (!stack.empty()) {
             const Link lk = stack.back();
             stack.pop_back();
-            const QuadNode node = field.node(lk.node);
+            const QuadNode node = field_.node(lk.node);
             const auto& et = em.levels[size_t(lk.level)][size_t(lk.j) * (1u << lk.level) + lk.i];
             if (et.area <= 0 || et.db_max <= 0)
                 continue;
             Vec3f rc;
             float rr;
-            node_bounds(node, &rc, &rr);
+            NodeBounds(node, &rc, &rr);
             const double dist = double(Length(rc - et.pos)) - rr - et.radius;
-            const double size_r = sc.scale * node.size();
+            const double size_r = sc_.scale * node.size();
             const double size_e = em.scale / double(1u << lk.level);
             const bool recv_can = !node.leaf();
             const bool emit_can = lk.level < top;
             const double bound =
                 dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
-            const bool small =
-                dist > 0 && size_r / dist <= receiver_tau && size_e / dist <= opt_.emitter_tau;
+            const bool small = dist > 0 && size_r / dist <= receiver_tau_ &&
+                               size_e / dist <= s_.opt_.emitter_tau;
             // A receiver node already smaller than the finest emitter samples gains nothing
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
-            if (small || bound < negligible || (!recv_can && !emit_can) || emitter_bound) {
+            if (small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
-                evaluate_link(lk.node, em, lk.level, lk.i, lk.j, ls);
+                EvaluateLink(lk.node, em, lk, ls);
                 continue;
             }
             const bool split_receiver = recv_can && (!emit_can || size_r >= size_e);
@@ -394,7 +298,106 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
             }
         }
     }
-    field.PushPending();
+
+private:
+    struct Link {
+        uint32_t node;  // receiver node
+        int level;      // emitter region (level, i, j)
+        uint32_t i, j;
+    };
+    struct Pair {
+        uint32_t point;
+        uint32_t texel;
+        Vec3f contribution;  // E per unit radiosity of the texel
+    };
+
+    // Receiver node bounds from the geometry pyramid.
+    void NodeBounds(const QuadNode& node, Vec3f* center, float* radius) const {
+        if (int(node.level) <= finest_) {
+            const auto& g = sc_.geometry.At(node.level, node.i, node.j);
+            *center = g.position;
+            *radius = g.radius;
+        } else {
+            auto smp =
+                SampleBilinear(sc_.geometry, finest_, float(node.U(0.5)), float(node.V(0.5)));
+            *center = smp.position;
+            *radius = float(sc_.scale * node.size() * 0.75);
+        }
+    }
+
+    // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
+    // Gauss points; adds the projection to the node's pending set.
+    void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls) {
+        s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+        const auto& texels = em.levels[size_t(ls)];
+        CollectPairs(texels, lk, ls, em.scale);
+        if (pairs_.empty())
+            return;
+        batch_.Trace(s_.vis_, RayKind::kLink);
+        e9_.assign(pts_.size() * 9, 0.f);
+        for (size_t q = 0; q < pairs_.size(); ++q) {
+            if (batch_.occluded[q])
+                continue;
+            const Pair& pr = pairs_[q];
+            const Vec3f& db = texels[pr.texel].db;
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < 3; ++k)
+                    e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
+        }
+        ToFieldValues(pts_, albedo_, e9_, s_.opt_.settings.radiosity, &vals_);
+        ProjectGauss(order_, ng_, vals_.data(), field_.blocks(), coeffs_.data());
+        float* pend = field_.pending(n);
+        for (int k = 0; k < field_.stride(); ++k)
+            pend[k] += coeffs_[size_t(k)];
+    }
+
+    // Every (Gauss point, texel of the region) pair that can carry light, with its
+    // transfer (transfer.h) and its visibility segment.
+    void CollectPairs(const std::vector<Emitter::Texel>& texels, const Link& lk, int ls,
+                      double emitter_scale) {
+        const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
+        const double texel_side = emitter_scale / double(row);
+        pairs_.clear();
+        batch_.Clear();
+        for (uint32_t p = 0; p < pts_.size(); ++p) {
+            const ReceiverPoint& rp = pts_[p];
+            const Vec3f org = rp.vis_point + rp.normal * eps_;
+            for (uint32_t b = 0; b < span; ++b) {
+                for (uint32_t a = 0; a < span; ++a) {
+                    const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
+                    const auto& t = texels[k];
+                    if (t.area <= 0 || t.db_max <= 0)
+                        continue;
+                    Vec3d contrib;
+                    if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area},
+                                       texel_side, &contrib))
+                        continue;
+                    pairs_.push_back({p, k, Vec3f(contrib)});
+                    batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                }
+            }
+        }
+    }
+
+    Solver& s_;
+    const SolveChart& sc_;
+    const GeometryPin pin_;
+    ChartField& field_;
+    const int order_, ng_, finest_;
+    const float eps_;
+    double receiver_tau_ = 0, negligible_ = 0;
+    std::vector<ReceiverPoint> pts_;
+    std::vector<Vec3f> albedo_;
+    std::vector<Pair> pairs_;
+    std::vector<float> e9_, vals_, coeffs_;
+    SegmentBatch batch_;
+};
+
+void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
+    Gatherer gatherer(*this, receiver);
+    for (const Emitter& em : emitters)
+        gatherer.Shoot(em);
+    fields_[receiver].PushPending();
 }
 
 void Solver::Restore(std::vector<ChartField> fields, double reference, int next_batch,

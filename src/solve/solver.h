@@ -103,6 +103,7 @@ public:
 private:
     struct Emitter;
     class DirectSampler;  // refine_direct.cpp
+    class Gatherer;
     void RefineDirect(uint32_t chart);
     void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);

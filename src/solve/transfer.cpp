@@ -1,0 +1,48 @@
+#include "solve/transfer.h"
+
+#include "solve/polygon_light.h"
+
+#include <cmath>
+#include <numbers>
+
+namespace mebake::solve {
+
+namespace {
+
+// The texel as a square of its area in its tangent plane, clipped to x's upper half-space.
+bool NearField(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e) {
+    const Vec3f nz = t.nrm;
+    const Vec3f ref = std::abs(nz.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
+    const Vec3f tu = Normalize(Cross(ref, nz)), tv = Cross(nz, tu);
+    const double h = 0.5 * std::sqrt(double(t.area));
+    const Vec3d c(t.pos), au(tu), av(tv);
+    const Vec3d quad[4] = {c - au * h - av * h, c + au * h - av * h, c + au * h + av * h,
+                           c - au * h + av * h};
+    Vec3d clipped[8];
+    const int nc = ClipToHalfSpace(quad, 4, Vec3d(x), Vec3d(n), clipped);
+    if (nc < 3)
+        return false;
+    *e = VectorIrradiance({clipped, size_t(nc)}, 1.0 / std::numbers::pi, Vec3d(x));
+    return true;
+}
+
+}  // namespace
+
+bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double texel_side,
+                   Vec3d* e) {
+    const Vec3d d = Vec3d(t.pos) - Vec3d(x);
+    const double r2 = Dot(d, d);
+    if (r2 < 1e-20)
+        return false;
+    if (Dot(d, Vec3d(n)) <= 0)
+        return false;  // below the receiver's horizon
+    const double ce = -Dot(d, Vec3d(t.nrm));
+    if (ce <= 0)
+        return false;  // the emitter faces away
+    if (r2 < 4 * texel_side * texel_side)
+        return NearField(x, n, t, e);
+    *e = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
+    return true;
+}
+
+}  // namespace mebake::solve

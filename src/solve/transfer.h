@@ -1,0 +1,26 @@
+// The kernel of the indirect transfer: vector irradiance at a receiving point x (normal n)
+// from one emitter texel of unit radiosity (docs/method.md, Indirect light):
+//   far:  dE = (y - x) A cos_y / (pi r^4), the texel as a point of area A at y;
+//   near: closer than two texel sides, the texel as a uniform square of area A in its
+//         tangent plane, clipped to the receiver's upper half-space and integrated in
+//         closed form (polygon_light.h), so nothing blows up as r -> 0.
+// The solver's gather (solver.cpp) evaluates every link through it; transfer_test.cpp
+// checks it against Lambert's formula and the far form.
+#pragma once
+
+#include "core/vec.h"
+
+namespace mebake::solve {
+
+struct TexelSource {
+    Vec3f pos, nrm;  // centre and unit normal (the emitting side)
+    float area = 0;  // real area, world units
+};
+
+// Adds nothing and returns false when the texel cannot light x: it lies below x's tangent
+// plane, faces away from x, coincides with x, or (near form) is wholly below the horizon.
+// `texel_side` is the side of the texel's level, which picks the form.
+bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double texel_side,
+                   Vec3d* e);
+
+}  // namespace mebake::solve

@@ -1,0 +1,86 @@
+// The indirect transfer kernel (solve/transfer.h) the solver's gather runs: its far form is
+// the transport formula, its texels add up to Lambert's closed form for a square, the near
+// and far forms meet where the solver switches between them, and the near form stays
+// bounded as the receiver approaches the texel.
+#include "solve/transfer.h"
+
+#include "solve/polygon_light.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace mebake::solve {
+namespace {
+
+// Unit radiosity B = 1 is radiance 1/pi.
+constexpr double kUnitRadiance = 1.0 / std::numbers::pi;
+
+TEST(Transfer, FarFormIsTheTransportFormula) {
+    const Vec3f x{0.1f, -0.2f, 0.0f}, n{0, 0, 1};
+    const TexelSource t{{0.3f, 0.4f, 2.0f}, Normalize(Vec3f{0.1f, -0.1f, -1.0f}), 0.01f};
+    Vec3d e;
+    ASSERT_TRUE(TexelTransfer(x, n, t, 0.1, &e));
+    const Vec3d d = Vec3d(t.pos) - Vec3d(x);
+    const double r2 = Dot(d, d), ce = -Dot(d, Vec3d(t.nrm));
+    const Vec3d want = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
+    EXPECT_NEAR(e.x, want.x, 1e-12);
+    EXPECT_NEAR(e.y, want.y, 1e-12);
+    EXPECT_NEAR(e.z, want.z, 1e-12);
+}
+
+TEST(Transfer, TexelsOfASquareSumToLambertsFormula) {
+    // A unit square at height 1 facing down, cut into k x k texels; x below its corner.
+    const Vec3f x{0.2f, -0.3f, 0.0f}, n = Normalize(Vec3f{0.2f, 0.1f, 1.0f});
+    for (int k : {16, 64}) {
+        const double side = 1.0 / k;
+        Vec3d sum{};
+        for (int i = 0; i < k; ++i)
+            for (int j = 0; j < k; ++j) {
+                const TexelSource t{{float((i + 0.5) * side), float((j + 0.5) * side), 1.0f},
+                                    {0, 0, -1},
+                                    float(side * side)};
+                Vec3d e;
+                if (TexelTransfer(x, n, t, side, &e))
+                    sum = sum + e;
+            }
+        const std::vector<Vec3d> square = {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}};
+        const Vec3d want = VectorIrradiance(square, kUnitRadiance, Vec3d(x));
+        EXPECT_NEAR(Length(sum - want) / Length(want), 0, k == 16 ? 5e-3 : 5e-4) << k;
+    }
+}
+
+TEST(Transfer, NearAndFarFormsMeetAtTheSwitch) {
+    // On either side of r = 2 texel sides the two forms describe the same texel.
+    const double side = 0.05;
+    const TexelSource t{{0, 0, 0}, {0, 0, 1}, float(side * side)};
+    const Vec3f n = Normalize(Vec3f{0.3f, 0.0f, -1.0f});
+    Vec3d near_e, far_e;
+    ASSERT_TRUE(TexelTransfer(Vec3f{0.02f, 0.0f, float(2 * side * 0.999)}, n, t, side, &near_e));
+    ASSERT_TRUE(TexelTransfer(Vec3f{0.02f, 0.0f, float(2 * side * 1.001)}, n, t, side, &far_e));
+    EXPECT_NEAR(Length(near_e - far_e) / Length(far_e), 0, 0.03);
+}
+
+TEST(Transfer, NearFormStaysBoundedCloseToTheTexel) {
+    // Just above the centre of a texel, it fills the hemisphere: |E| -> pi L = B = 1.
+    const TexelSource t{{0, 0, 0}, {0, 0, 1}, 1e-4f};
+    Vec3d e;
+    ASSERT_TRUE(TexelTransfer(Vec3f{0, 0, 1e-7f}, {0, 0, -1}, t, 1e-2, &e));
+    EXPECT_TRUE(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z));
+    EXPECT_NEAR(e.z, -1.0, 1e-2) << "E points from the receiver toward the source";
+    EXPECT_LE(Length(e), 1.0 + 1e-9);
+}
+
+TEST(Transfer, NoLightFromBelowTheHorizonFromBehindOrFromX) {
+    const TexelSource t{{0, 0, 1}, {0, 0, -1}, 0.01f};
+    Vec3d e;
+    EXPECT_FALSE(TexelTransfer({0, 0, 0}, {0, 0, -1}, t, 0.1, &e)) << "below the horizon";
+    const TexelSource away{{0, 0, 1}, {0, 0, 1}, 0.01f};
+    EXPECT_FALSE(TexelTransfer({0, 0, 0}, {0, 0, 1}, away, 0.1, &e)) << "facing away";
+    EXPECT_FALSE(TexelTransfer({0, 0, 1}, {0, 0, 1}, t, 0.1, &e)) << "at x";
+}
+
+}  // namespace
+}  // namespace mebake::solve
