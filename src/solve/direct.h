@@ -100,6 +100,7 @@ private:
                        std::span<const size_t> which, const uint8_t* prior_cls,
                        const uint8_t* prior_grid, std::span<float> out,
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
+    class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
                   const uint8_t* prior, std::vector<Vec3d>* e, std::vector<uint8_t>* states) const;

@@ -1,0 +1,361 @@
+// DirectLight::Penumbra: the visible part of one polygon light at points in its penumbra.
+// Per point, the light's fan triangles start as 2 x 2 grids of cells whose corners are
+// tested with one ray each (the classification rays give the light's own vertices); a cell
+// whose corners agree is taken as wholly visible or hidden, one whose corners disagree is
+// split in four, down to the finest grid, where a mixed cell counts as 1/4 or 3/4 visible
+// (or, where the shadow edge runs along a row of cells, is visible as one fixed
+// low-discrepancy point in it is). Corners well below the point's horizon are not traced
+// and do not count. Rays go only where a shadow edge crosses the light, and all points of a
+// level share one Embree batch. docs/method.md, "Direct light", says why.
+#include "solve/direct.h"
+
+#include "solve/polygon_light.h"
+#include "solve/rays.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mebake::solve {
+
+namespace {
+
+// Light-grid vertices more than this (sine of the angle, ~3.4 degrees) below a point's
+// smooth horizon get no visibility ray and do not decide whether a cell is uniform. E
+// ignores light below that horizon, but the real surface departs from it: just below, a
+// visible vertex still says the light above it is visible (a convex bump falls away). At 0
+// the noisy sphere's penumbra rays halve again but the bunny's error grew by 0.03 points;
+// 0.06 left it unchanged (bench/RESULTS.md, "Speed, session 3").
+constexpr double kHorizonMargin = 0.06;
+
+// Grid vertex states per point.
+enum : uint8_t { kUnknown = 0, kRequested = 1, kVisible = 2, kHidden = 3 };
+
+}  // namespace
+
+class DirectLight::PenumbraPass {
+public:
+    // A cell: a triangle of grid vertices (a[k], b[k]) in fan triangle t, for point q.
+    struct Cell {
+        uint32_t q;  // penumbra point
+        uint16_t t;  // fan triangle
+        uint8_t a[3], b[3];
+    };
+
+    PenumbraPass(const DirectLight& dl, const Light& l, std::span<const ReceiverPoint> points,
+                 std::span<const size_t> penumbra)
+        : dl_(dl), l_(l), points_(points), penumbra_(penumbra), g_(l.grid),
+          nt_(l.vertices.size() - 2), per_t_(size_t(g_ + 1) * size_t(g_ + 1)), nv_(nt_ * per_t_),
+          state_(penumbra.size() * nv_, kUnknown) {
+        PrepareHorizons();
+    }
+
+    // Vertex states from an earlier pass over the same points (or none), and the light's
+    // own vertices from the classification rays.
+    void SeedStates(std::span<const uint8_t> classified, const uint8_t* prior) {
+        const size_t nk = l_.classify.size();
+        for (size_t q = 0; q < penumbra_.size(); ++q) {
+            uint8_t* st = &state_[q * nv_];
+            if (prior)
+                std::copy(prior, prior + nv_, st);
+            const uint8_t* cls = &classified[q * nk];
+            for (size_t t = 0; t < nt_; ++t) {
+                st[VertexIndex(t, 0, 0)] = cls[0] ? kHidden : kVisible;
+                st[VertexIndex(t, g_, 0)] = cls[t + 1] ? kHidden : kVisible;
+                st[VertexIndex(t, 0, g_)] = cls[t + 2] ? kHidden : kVisible;
+            }
+        }
+    }
+
+    // E of the visible part at each penumbra point.
+    void Run(std::vector<Vec3d>* e) {
+        std::vector<Cell> finest = RefineCells(e);
+        ResolveFinest(finest, e);
+    }
+
+    // The vertex states, requests forgotten (for the probe cache).
+    std::vector<uint8_t> TakeStates() {
+        for (auto& st : state_)
+            st = st == kRequested ? uint8_t(kUnknown) : st;
+        return std::move(state_);
+    }
+
+private:
+    // Fan triangles t and t+1 share the edge v0 v[t+2]: its vertices (a, 0) in t+1 are
+    // (0, a) in t (the same point, computed the same way), so they are traced once.
+    size_t VertexIndex(size_t t, int a, int b) const {
+        if (b == 0 && t > 0)
+            return (t - 1) * per_t_ + size_t(a) * size_t(g_ + 1);
+        return t * per_t_ + size_t(b) * size_t(g_ + 1) + size_t(a);
+    }
+    size_t CornerIndex(const Cell& c, int k) const { return VertexIndex(c.t, c.a[k], c.b[k]); }
+
+    // Per point: the sign that turns the Lambert sum into E (all cells lie in the light's
+    // plane with its winding), and whether the horizon plane cuts the light at all.
+    void PrepareHorizons() {
+        sign_.resize(penumbra_.size());
+        cut_.resize(penumbra_.size());
+        for (size_t q = 0; q < penumbra_.size(); ++q) {
+            const ReceiverPoint& rp = points_[penumbra_[q]];
+            const Vec3d x(rp.position), h(rp.horizon);
+            const double side = Dot(x - l_.vertices[0], l_.normal);
+            sign_[q] = side > 0 ? -0.5 : l_.two_sided && side < 0 ? 0.5 : 0.0;
+            cut_[q] = 0;
+            for (const auto& v : l_.vertices)
+                cut_[q] |= Dot(v - x, h) < 0;
+        }
+    }
+
+    // The coarse level: each fan triangle of each point as 2 x 2 cells (or the grid's own).
+    std::vector<Cell> InitialCells() const {
+        std::vector<Cell> cells;
+        const int start = std::min(g_, 2), s = g_ / start;
+        for (uint32_t q = 0; q < penumbra_.size(); ++q) {
+            for (size_t t = 0; t < nt_; ++t) {
+                for (int b = 0; b < g_; b += s) {
+                    for (int a = 0; a + b < g_; a += s) {
+                        cells.push_back({q,
+                                         uint16_t(t),
+                                         {uint8_t(a), uint8_t(a + s), uint8_t(a)},
+                                         {uint8_t(b), uint8_t(b), uint8_t(b + s)}});
+                        if (a + b + 2 * s <= g_)
+                            cells.push_back({q,
+                                             uint16_t(t),
+                                             {uint8_t(a + s), uint8_t(a + s), uint8_t(a)},
+                                             {uint8_t(b), uint8_t(b + s), uint8_t(b + s)}});
+                    }
+                }
+            }
+        }
+        return cells;
+    }
+
+    // The cell's E if it were wholly visible, above the point's horizon.
+    Vec3d ClosedForm(const Cell& c) const {
+        const Vec3d tri[3] = {l_.grid_pos[CornerIndex(c, 0)], l_.grid_pos[CornerIndex(c, 1)],
+                              l_.grid_pos[CornerIndex(c, 2)]};
+        const ReceiverPoint& rp = points_[penumbra_[c.q]];
+        const Vec3d x(rp.position);
+        if (!cut_[c.q])
+            return LambertSum(tri, 3, x) * sign_[c.q];
+        Vec3d poly[6];
+        const int n = ClipToHalfSpace(tri, 3, x, Vec3d(rp.horizon), poly);
+        if (n < 3)
+            return Vec3d{};
+        return LambertSum(poly, n, x) * sign_[c.q];
+    }
+
+    Vec3f Origin(uint32_t q) const {
+        const ReceiverPoint& rp = points_[penumbra_[q]];
+        return rp.vis_point + rp.normal * dl_.offset_;
+    }
+
+    // E counts only light above the point's (smooth) horizon, so a grid vertex well below it
+    // (kHorizonMargin) gets no ray, and a cell is uniform when its other corners agree (the
+    // part of it that counts lies on their side). A cell wholly below adds nothing: no rays,
+    // no splitting (where the light sets, half of it can be).
+    double Height(uint32_t q, size_t v) const {
+        const ReceiverPoint& rp = points_[penumbra_[q]];
+        const Vec3d d = l_.grid_pos[v] - Vec3d(rp.position);
+        return Dot(d, Vec3d(rp.horizon)) / std::max(Length(d), 1e-30);
+    }
+    bool Above(uint32_t q, size_t v) const { return !cut_[q] || Height(q, v) >= -kHorizonMargin; }
+    bool Below(const Cell& c) const {
+        if (!cut_[c.q])
+            return false;
+        for (int k = 0; k < 3; ++k)
+            if (Height(c.q, CornerIndex(c, k)) >= 0)
+                return false;
+        return true;
+    }
+
+    // A cell's corners not well below the horizon: how many are visible and hidden.
+    void Corners(const Cell& c, int* visible, int* hidden) const {
+        const uint8_t* st = &state_[c.q * nv_];
+        *visible = *hidden = 0;
+        for (int k = 0; k < 3; ++k) {
+            const size_t v = CornerIndex(c, k);
+            if (!Above(c.q, v))
+                continue;
+            *visible += st[v] == kVisible;
+            *hidden += st[v] == kHidden;
+        }
+    }
+
+    // One ray per corner of `cells` whose visibility is not known yet, in one batch.
+    void TraceCorners(const std::vector<Cell>& cells) {
+        batch_.Clear();
+        asked_.clear();
+        for (const Cell& c : cells) {
+            for (int k = 0; k < 3; ++k) {
+                const size_t v = CornerIndex(c, k);
+                uint8_t& st = state_[c.q * nv_ + v];
+                if (st != kUnknown || !Above(c.q, v))
+                    continue;
+                st = kRequested;
+                asked_.push_back({c.q, uint32_t(v)});
+                batch_.AddSegment(Origin(c.q), l_.grid_target[v]);
+            }
+        }
+        batch_.Trace(dl_.vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < asked_.size(); ++r)
+            state_[asked_[r].first * nv_ + asked_[r].second] =
+                batch_.occluded[r] ? kHidden : kVisible;
+    }
+
+    // Level by level: uniform cells add their closed form (when visible), mixed cells are
+    // split in four down to the finest grid. Returns the finest mixed cells.
+    std::vector<Cell> RefineCells(std::vector<Vec3d>* e) {
+        std::vector<Cell> cur = InitialCells(), next, finest;
+        while (!cur.empty()) {
+            cur.erase(std::remove_if(cur.begin(), cur.end(),
+                                     [&](const Cell& c) { return Below(c); }),
+                      cur.end());
+            TraceCorners(cur);
+            next.clear();
+            for (const Cell& c : cur) {
+                int visible, hidden;
+                Corners(c, &visible, &hidden);
+                if (visible == 0 || hidden == 0) {
+                    if (hidden == 0)
+                        (*e)[c.q] += ClosedForm(c);
+                    continue;
+                }
+                if (Side(c) <= 1)
+                    finest.push_back(c);
+                else
+                    Split(c, &next);
+            }
+            std::swap(cur, next);
+        }
+        return finest;
+    }
+
+    static int Side(const Cell& c) {
+        int side = 0;
+        for (int k = 0; k < 3; ++k)
+            side = std::max({side, std::abs(int(c.a[k]) - int(c.a[(k + 1) % 3])),
+                             std::abs(int(c.b[k]) - int(c.b[(k + 1) % 3]))});
+        return side;
+    }
+
+    // Midpoints of the edges 01, 12, 20; the four children.
+    static void Split(const Cell& c, std::vector<Cell>* out) {
+        const uint8_t ma[3] = {uint8_t((c.a[0] + c.a[1]) / 2), uint8_t((c.a[1] + c.a[2]) / 2),
+                               uint8_t((c.a[2] + c.a[0]) / 2)};
+        const uint8_t mb[3] = {uint8_t((c.b[0] + c.b[1]) / 2), uint8_t((c.b[1] + c.b[2]) / 2),
+                               uint8_t((c.b[2] + c.b[0]) / 2)};
+        out->push_back({c.q, c.t, {c.a[0], ma[0], ma[2]}, {c.b[0], mb[0], mb[2]}});
+        out->push_back({c.q, c.t, {ma[0], c.a[1], ma[1]}, {mb[0], c.b[1], mb[1]}});
+        out->push_back({c.q, c.t, {ma[2], ma[1], c.a[2]}, {mb[2], mb[1], c.b[2]}});
+        out->push_back({c.q, c.t, {ma[0], ma[1], ma[2]}, {mb[0], mb[1], mb[2]}});
+    }
+
+    // The cell in canonical form: up (a,b) (a+1,b) (a,b+1) or down (a+1,b) (a+1,b+1) (a,b+1).
+    static void Canonical(const Cell& c, int* a0, int* b0, bool* down) {
+        *a0 = std::min({c.a[0], c.a[1], c.a[2]});
+        *b0 = std::min({c.b[0], c.b[1], c.b[2]});
+        *down = c.a[0] + c.a[1] + c.a[2] - 3 * *a0 == 2;
+    }
+
+    // Points where four or more mixed finest cells of one fan triangle lie in one row of a
+    // cell family: a shadow edge runs along that row.
+    std::vector<uint8_t> AlignedPoints(const std::vector<Cell>& finest) const {
+        struct Span {
+            int lo[3] = {1 << 20, 1 << 20, 1 << 20}, hi[3] = {-1, -1, -1}, count = 0;
+        };
+        std::vector<Span> spans(penumbra_.size() * nt_);  // per point and fan triangle
+        for (const Cell& c : finest) {
+            int a0, b0;
+            bool down;
+            Canonical(c, &a0, &b0, &down);
+            Span& sp = spans[c.q * nt_ + c.t];
+            const int row[3] = {a0, b0, a0 + b0 + (down ? 1 : 0)};
+            for (int f = 0; f < 3; ++f)
+                sp.lo[f] = std::min(sp.lo[f], row[f]), sp.hi[f] = std::max(sp.hi[f], row[f]);
+            ++sp.count;
+        }
+        std::vector<uint8_t> aligned(spans.size() / std::max<size_t>(nt_, 1), 0);
+        for (size_t k = 0; k < spans.size(); ++k) {
+            const Span& sp = spans[k];
+            aligned[k / nt_] |= sp.count >= 4 && (sp.hi[0] == sp.lo[0] || sp.hi[1] == sp.lo[1] ||
+                                                 sp.hi[2] == sp.lo[2]);
+        }
+        return aligned;
+    }
+
+    // Finest cells that a shadow edge crosses count as partly visible without a ray: with one
+    // corner visible, the visible part is the corner's triangle cut off by the edge, s t of
+    // the cell for crossings at s and t along its two sides, 1/4 on average over uniform
+    // crossings (two corners: 3/4), with less variance than one ray (1/9 - 1/16 against
+    // 1/4 - 1/9). An edge parallel to a family of cell rows crosses them all at the same
+    // offset, which biases that by up to half a row: at such points each mixed cell gets one
+    // ray to a fixed point of an R2 low-discrepancy sequence indexed by the cell.
+    void ResolveFinest(const std::vector<Cell>& finest, std::vector<Vec3d>* e) {
+        const std::vector<uint8_t> aligned = AlignedPoints(finest);
+        batch_.Clear();
+        std::vector<uint32_t> traced;
+        for (uint32_t k = 0; k < finest.size(); ++k) {
+            const Cell& c = finest[k];
+            if (!aligned[c.q]) {
+                int visible, hidden;
+                Corners(c, &visible, &hidden);
+                (*e)[c.q] += ClosedForm(c) * (visible + hidden == 2 ? 0.5
+                                              : visible == 1        ? 0.25
+                                                                    : 0.75);
+                continue;
+            }
+            batch_.AddSegment(Origin(c.q), SamplePoint(c));
+            traced.push_back(k);
+        }
+        batch_.Trace(dl_.vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < traced.size(); ++r)
+            if (!batch_.occluded[r])
+                (*e)[finest[traced[r]].q] += ClosedForm(finest[traced[r]]);
+    }
+
+    // The cell's fixed low-discrepancy point (R2 sequence indexed by the cell).
+    Vec3f SamplePoint(const Cell& c) const {
+        int a0, b0;
+        bool down;
+        Canonical(c, &a0, &b0, &down);
+        const uint64_t id = (uint64_t(c.t) * uint64_t(g_) + uint64_t(a0)) * uint64_t(2 * g_) +
+                            uint64_t(2 * b0 + (down ? 1 : 0));
+        double a = std::fmod(0.5 + 0.7548776662466927 * double(id + 1), 1.0);
+        double b = std::fmod(0.5 + 0.5698402909980532 * double(id + 1), 1.0);
+        if (a + b > 1)
+            a = 1 - a, b = 1 - b;
+        const Vec3d& p0 = l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0) : VertexIndex(c.t, a0, b0)];
+        const Vec3d& p1 =
+            l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0 + 1) : VertexIndex(c.t, a0 + 1, b0)];
+        const Vec3d& p2 = l_.grid_pos[VertexIndex(c.t, a0, b0 + 1)];
+        return Vec3f(p0 + (p1 - p0) * a + (p2 - p0) * b);
+    }
+
+    const DirectLight& dl_;
+    const Light& l_;
+    std::span<const ReceiverPoint> points_;
+    std::span<const size_t> penumbra_;
+    const int g_;
+    const size_t nt_, per_t_, nv_;
+    std::vector<uint8_t> state_;
+    std::vector<double> sign_;
+    std::vector<uint8_t> cut_;
+    SegmentBatch batch_;
+    std::vector<std::pair<uint32_t, uint32_t>> asked_;  // (point, vertex)
+};
+
+void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
+                           std::span<const size_t> penumbra, std::span<const uint8_t> classified,
+                           const uint8_t* prior, std::vector<Vec3d>* e,
+                           std::vector<uint8_t>* states) const {
+    e->assign(penumbra.size(), Vec3d{});
+    if (penumbra.empty())
+        return;
+    PenumbraPass pass(*this, l, points, penumbra);
+    pass.SeedStates(classified, prior);
+    pass.Run(e);
+    if (states)
+        *states = pass.TakeStates();
+}
+
+}  // namespace mebake::solve
