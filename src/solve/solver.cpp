@@ -410,6 +410,77 @@ void Solver::Restore(std::vector<ChartField> fields, double reference, int next_
     stats_ = stats;
 }
 
+// The brightest root-level direct irradiance: the floor of the refinement scale.
+double Solver::ReferenceIrradiance() const {
+    DirectLight direct(scene_, opt_.settings, vis_, opt_.ray_offset, opt_.scene_size);
+    std::vector<ReceiverPoint> pts;
+    for (const auto& c : charts_) {
+        for (int k = 0; k < std::min(c.geometry.finest_level(), 2) + 1; ++k) {
+            for (const auto& g : c.geometry.levels[size_t(k)])
+                if (g.area > 0)
+                    pts.push_back({g.position, g.normal, g.vis_point});
+        }
+    }
+    std::vector<float> e(pts.size() * 9, 0.f);
+    // In chunks (each point's light is its own, so the same bits): the rays of every
+    // chart's points at once took memory in proportion to the chart count (~60 MiB of
+    // the peak at 16M triangles).
+    constexpr size_t kChunk = 256;
+    for (size_t p0 = 0; p0 < pts.size() && !direct.empty(); p0 += kChunk) {
+        const size_t n = std::min(kChunk, pts.size() - p0);
+        direct.Evaluate(std::span<const ReceiverPoint>(pts).subspan(p0, n),
+                        std::span<float>(e).subspan(p0 * 9, n * 9));
+    }
+    double ref = 0;
+    for (size_t p = 0; p < pts.size(); ++p)
+        for (int c = 0; c < 3; ++c) {
+            const float* v = &e[p * 9 + size_t(3 * c)];
+            ref = std::max(ref, double(Length(Vec3f(v[0], v[1], v[2]))));
+        }
+    return ref;
+}
+
+// One Southwell batch: shooters are the charts with power within batch_fraction of the
+// largest, in chart order (the first batch shoots every chart, so emission, added only to
+// first shots, goes out once). Returns the number of shooters.
+size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first) {
+    const uint32_t nc = uint32_t(charts_.size());
+    std::vector<uint32_t> shooters;
+    for (uint32_t c = 0; c < nc; ++c)
+        if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
+            shooters.push_back(c);
+    // Emitters are built and gathered a group of shooters at a time: all at once they took
+    // ~80 KB per chart (49 MB at 598 charts), memory that grew with the chart count rather
+    // than the lighting. Light that one group delivers may be shot by a later group of the
+    // same batch (Southwell shooting allows any order); the groups depend on the chart
+    // order only, not on the thread count.
+    const size_t group = std::max<size_t>(1, opt_.emitter_group);
+    for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
+        const size_t g1 = std::min(shooters.size(), g0 + group);
+        std::vector<Emitter> emitters(g1 - g0);
+        ParallelFor(0, int64_t(g1 - g0), [&](int64_t k) {
+            BuildEmitter(shooters[g0 + size_t(k)], first, &emitters[size_t(k)]);
+        });
+        for (size_t k = g0; k < g1; ++k)
+            fields_[shooters[k]].ClearUnshot();
+        ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
+    }
+    return shooters.size();
+}
+
+// Nodes per level, leaves and field memory, for the statistics.
+void Solver::CountNodes() {
+    for (const auto& f : fields_) {
+        for (const auto& n : f.nodes()) {
+            if (stats_.nodes_per_level.size() <= n.level)
+                stats_.nodes_per_level.resize(n.level + 1u);
+            ++stats_.nodes_per_level[n.level];
+            stats_.leaves += n.leaf() ? 1 : 0;
+        }
+        stats_.field_bytes += f.MemoryBytes();
+    }
+}
+
 void Solver::Run(const Progress& progress) {
     const auto t0 = Clock::now();
     const uint32_t nc = uint32_t(charts_.size());
@@ -421,37 +492,8 @@ void Solver::Run(const Progress& progress) {
     for (size_t k = 0; k < kinds0.size() && k < stats_.rays_by_kind.size(); ++k)
         kinds0[k] -= stats_.rays_by_kind[k];
 
-    // Reference irradiance for the refinement floor: the brightest root-level estimate.
     if (next_batch_ < 0) {
-        DirectLight direct(scene_, opt_.settings, vis_, opt_.ray_offset, opt_.scene_size);
-        std::vector<ReceiverPoint> pts;
-        for (const auto& c : charts_) {
-            for (int k = 0; k < std::min(c.geometry.finest_level(), 2) + 1; ++k) {
-                for (const auto& g : c.geometry.levels[size_t(k)])
-                    if (g.area > 0)
-                        pts.push_back({g.position, g.normal, g.vis_point});
-            }
-        }
-        std::vector<float> e(pts.size() * 9, 0.f);
-        // In chunks (each point's light is its own, so the same bits): the rays of every
-        // chart's points at once took memory in proportion to the chart count (~60 MiB of
-        // the peak at 16M triangles).
-        constexpr size_t kChunk = 256;
-        for (size_t p0 = 0; p0 < pts.size() && !direct.empty(); p0 += kChunk) {
-            const size_t n = std::min(kChunk, pts.size() - p0);
-            direct.Evaluate(std::span<const ReceiverPoint>(pts).subspan(p0, n),
-                            std::span<float>(e).subspan(p0 * 9, n * 9));
-        }
-        double ref = 0;
-        for (size_t p = 0; p < pts.size(); ++p)
-            for (int c = 0; c < 3; ++c) {
-                const float* v = &e[p * 9 + size_t(3 * c)];
-                ref = std::max(ref, double(Length(Vec3f(v[0], v[1], v[2]))));
-            }
-        reference_ = ref;
-    }
-
-    if (next_batch_ < 0) {
+        reference_ = ReferenceIrradiance();
         ParallelFor(0, nc, [&](int64_t c) {
             if (!stop_ || !stop_->load()) RefineDirect(uint32_t(c));
         });
@@ -498,29 +540,7 @@ void Solver::Run(const Progress& progress) {
             stats_.stop_reason = "time limit";
             break;
         }
-        // Shooters: power within batch_fraction of the largest, in chart order. The first
-        // batch shoots every chart, so emission (added only to first shots) goes out once.
-        std::vector<uint32_t> shooters;
-        for (uint32_t c = 0; c < nc; ++c)
-            if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
-                shooters.push_back(c);
-        // Emitters are built and gathered a group of shooters at a time: all at once they
-        // took ~80 KB per chart (49 MB at 598 charts), memory that grew with the chart count
-        // rather than the lighting. Light that one group delivers may be shot by a later
-        // group of the same batch (Southwell shooting allows any order); the groups depend
-        // on the chart order only, not on the thread count.
-        const size_t group = std::max<size_t>(1, opt_.emitter_group);
-        for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
-            const size_t g1 = std::min(shooters.size(), g0 + group);
-            std::vector<Emitter> emitters(g1 - g0);
-            ParallelFor(0, int64_t(g1 - g0), [&](int64_t k) {
-                BuildEmitter(shooters[g0 + size_t(k)], first, &emitters[size_t(k)]);
-            });
-            for (size_t k = g0; k < g1; ++k)
-                fields_[shooters[k]].ClearUnshot();
-            ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
-        }
-        stats_.shots += shooters.size();
+        stats_.shots += ShootBatch(power, largest, first);
         stats_.batches = batch + 1;
         first = false;
         next_batch_ = batch + 1;
@@ -537,15 +557,7 @@ void Solver::Run(const Progress& progress) {
     stats_.rays_by_kind.resize(kinds1.size());
     for (size_t k = 0; k < kinds1.size(); ++k)
         stats_.rays_by_kind[k] = kinds1[k] - kinds0[k];
-    for (const auto& f : fields_) {
-        for (const auto& n : f.nodes()) {
-            if (stats_.nodes_per_level.size() <= n.level)
-                stats_.nodes_per_level.resize(n.level + 1u);
-            ++stats_.nodes_per_level[n.level];
-            stats_.leaves += n.leaf() ? 1 : 0;
-        }
-        stats_.field_bytes += f.MemoryBytes();
-    }
+    CountNodes();
 }
 
 }  // namespace mebake::solve

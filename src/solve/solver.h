@@ -104,6 +104,9 @@ private:
     struct Emitter;
     class DirectSampler;  // refine_direct.cpp
     class Gatherer;
+    double ReferenceIrradiance() const;
+    size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
+    void CountNodes();
     void RefineDirect(uint32_t chart);
     void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);
