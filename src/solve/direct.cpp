@@ -3,6 +3,7 @@
 #include "core/check.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
+#include "solve/sky.h"
 #include "solve/visibility.h"
 
 #include <algorithm>
@@ -75,23 +76,8 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
         }
         lights_.push_back(std::move(l));
     }
-    if (sky_.type != Sky::Type::None) {
-        // Uniform directions (pdf 1 / (2 pi)), stratified in up . w (k rings of equal
-        // area, midpoints) and azimuth (k per ring, each ring turned by the golden angle).
-        // Not cosine-weighted about up: E . n for a tilted n weighs near-horizon directions
-        // by tan(zenith) against that density, and an 11 x 11 cosine grid missed 24% of a
-        // vertical face's sky. This rule is exact for an upward face (the rings' mean
-        // height is 1/2) and within 0.5% for most tilts (1.5% facing nearly down).
-        const int k = std::max(2, int(std::lround(std::sqrt(double(settings.sky_directions)))));
-        for (int i = 0; i < k; ++i) {
-            const double z = (i + 0.5) / k, radius = std::sqrt(1 - z * z);
-            for (int j = 0; j < k; ++j) {
-                const double phi = 2 * std::numbers::pi * (j + 0.5 + 0.618034 * i) / k;
-                sky_dirs_.push_back(
-                    Vec3f(float(radius * std::cos(phi)), float(radius * std::sin(phi)), float(z)));
-            }
-        }
-    }
+    if (sky_.type != Sky::Type::None)
+        sky_dirs_ = SkyDirections(settings.sky_directions);
 }
 
 double DirectLight::EmittedPower() const {
@@ -209,11 +195,20 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
                            size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
     CHECK_EQ(out.size(), points.size() * 9);
     std::fill(out.begin(), out.end(), 0.f);
-    SegmentBatch batch;
     if (cache)
         CHECK_EQ(keys.size(), probes);
+    if (parts & kLights)
+        AddLights(points, out, probes, cache, keys);
+    if (sky_.type != Sky::Type::None && (parts & kSky))
+        AddSky(points, out);
+}
 
-    const bool coherent = (parts & kLights) && probes > 0 && probes < points.size();
+// Every light at the points. With probes (the first `probes` points surround one small
+// patch), the probes are evaluated first, or found in the cache; where all of them agree
+// on a light vertex's visibility, the other points take it without a ray.
+void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
+                            size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
+    const bool coherent = probes > 0 && probes < points.size();
     // Probes found in the cache, and records for the others (filled light by light).
     std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
     std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
@@ -231,8 +226,6 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     std::vector<size_t> others(points.size() - (coherent ? probes : 0));
     std::iota(others.begin(), others.end(), coherent ? probes : 0);
     for (const auto& l : lights_) {
-        if (!(parts & kLights))
-            break;
         if (!coherent) {
             EvaluateLight(l, points, others, nullptr, nullptr, out, nullptr, nullptr);
             continue;
@@ -280,45 +273,45 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
             if (!found[q])
                 cache->map_.emplace(keys[q], std::move(fresh[q]));
     }
+}
 
-    if (sky_.type != Sky::Type::None && (parts & kSky)) {
-        // Fixed world-frame directions about the sky's up axis (uniform), so E
-        // changes with position only where visibility does.
-        batch.Clear();
-        const Vec3f up(sky_.up);
-        Vec3f t, b;
-        Frame(up, &t, &b);
-        std::vector<Vec3f> dirs(sky_dirs_.size());
-        for (size_t k = 0; k < sky_dirs_.size(); ++k)
-            dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
-        for (const auto& rp : points) {
-            const Vec3f o = rp.vis_point + rp.normal * offset_;
-            for (const auto& w : dirs) {
-                // Below the horizon: no ray, counted as blocked (tfar 0 never hits).
-                bool below = Dot(w, rp.horizon) < 0;
-                batch.Add(o, w, below ? -1.f : far_);
-            }
+// The sky at the points: one ray per fixed direction (sky.h), turned to the sky's up axis,
+// so E changes with position only where visibility does.
+void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const {
+    SegmentBatch batch;
+    const Vec3f up(sky_.up);
+    Vec3f t, b;
+    Frame(up, &t, &b);
+    std::vector<Vec3f> dirs(sky_dirs_.size());
+    for (size_t k = 0; k < sky_dirs_.size(); ++k)
+        dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
+    for (const auto& rp : points) {
+        const Vec3f o = rp.vis_point + rp.normal * offset_;
+        for (const auto& w : dirs) {
+            // Below the horizon: no ray, counted as blocked (tfar 0 never hits).
+            bool below = Dot(w, rp.horizon) < 0;
+            batch.Add(o, w, below ? -1.f : far_);
         }
-        batch.Trace(vis_, RayKind::kSky);
-        for (size_t k = 0; k < batch.size(); ++k)
-            if (batch.segments[k].tfar < 0)
-                batch.occluded[k] = 1;
-        // Estimator of E = integral of L(w) V w dw with the uniform pdf 1 / (2 pi):
-        // sum L w 2 pi / N.
-        const float scale = 2 * float(std::numbers::pi) / float(sky_dirs_.size());
-        size_t at = 0;
-        for (size_t p = 0; p < points.size(); ++p) {
-            for (size_t k = 0; k < dirs.size(); ++k) {
-                if (batch.occluded[at++])
-                    continue;
-                const Vec3f& w = dirs[k];
-                const float cos_up = sky_dirs_[k].z;
-                const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
-                for (int c = 0; c < 3; ++c) {
-                    const float l = float(sky_.radiance[c] * gain) * scale;
-                    for (int e = 0; e < 3; ++e)
-                        out[p * 9 + size_t(3 * c + e)] += l * w[e];
-                }
+    }
+    batch.Trace(vis_, RayKind::kSky);
+    for (size_t k = 0; k < batch.size(); ++k)
+        if (batch.segments[k].tfar < 0)
+            batch.occluded[k] = 1;
+    // Estimator of E = integral of L(w) V w dw with the uniform pdf 1 / (2 pi):
+    // sum L w 2 pi / N.
+    const float scale = 2 * float(std::numbers::pi) / float(sky_dirs_.size());
+    size_t at = 0;
+    for (size_t p = 0; p < points.size(); ++p) {
+        for (size_t k = 0; k < dirs.size(); ++k) {
+            if (batch.occluded[at++])
+                continue;
+            const Vec3f& w = dirs[k];
+            const float cos_up = sky_dirs_[k].z;
+            const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
+            for (int c = 0; c < 3; ++c) {
+                const float l = float(sky_.radiance[c] * gain) * scale;
+                for (int e = 0; e < 3; ++e)
+                    out[p * 9 + size_t(3 * c + e)] += l * w[e];
             }
         }
     }

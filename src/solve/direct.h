@@ -100,6 +100,9 @@ private:
                        std::span<const size_t> which, const uint8_t* prior_cls,
                        const uint8_t* prior_grid, std::span<float> out,
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
+    void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
+                   ProbeCache* cache, std::span<const ProbeKey> keys) const;
+    void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace mebake::solve {
 
@@ -34,53 +35,18 @@ double SkyIrradiance(const SkyModel& sky, const Vec3d& n) {
     return sky.a * i0 + sky.b * i1;
 }
 
-SkySamples MakeSkySamples(const SkyModel& sky, int n) {
-    CHECK_GT(n, 0);
-    SkySamples s;
-    s.dir.resize(size_t(n));
-    s.weight.resize(size_t(n));
-    // Orthonormal frame around up.
-    const Vec3d w = sky.up;
-    const Vec3d t = std::abs(w.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
-    const Vec3d u = Normalize(Cross(t, w));
-    const Vec3d v = Cross(w, u);
-    const double golden = M_PI * (3 - std::sqrt(5.0));
-    const double solid_angle = 2 * M_PI / n;
-    for (int k = 0; k < n; ++k) {
-        // z uniform in (0,1) gives equal solid angle per sample on the hemisphere.
-        const double z = 1 - (k + 0.5) / n;
-        const double r = std::sqrt(std::max(0.0, 1 - z * z));
-        const double phi = golden * k;
-        const Vec3d d = u * (r * std::cos(phi)) + v * (r * std::sin(phi)) + w * z;
-        s.dir[size_t(k)] = Vec3f(d);
-        s.weight[size_t(k)] = float((sky.a + sky.b * z) * solid_angle);
+std::vector<Vec3f> SkyDirections(int requested) {
+    std::vector<Vec3f> dirs;
+    const int k = std::max(2, int(std::lround(std::sqrt(double(requested)))));
+    for (int i = 0; i < k; ++i) {
+        const double z = (i + 0.5) / k, radius = std::sqrt(1 - z * z);
+        for (int j = 0; j < k; ++j) {
+            const double phi = 2 * std::numbers::pi * (j + 0.5 + 0.618034 * i) / k;
+            dirs.push_back(
+                Vec3f(float(radius * std::cos(phi)), float(radius * std::sin(phi)), float(z)));
+        }
     }
-    return s;
-}
-
-Vec3d SkyTransfer(const SkySamples& samples, std::span<const uint8_t> visible) {
-    CHECK(visible.empty() || visible.size() == samples.dir.size());
-    Vec3d e;
-    for (size_t k = 0; k < samples.dir.size(); ++k) {
-        if (!visible.empty() && !visible[k])
-            continue;
-        e += Vec3d(samples.dir[k]) * double(samples.weight[k]);
-    }
-    return e;
-}
-
-SkyVisibility SkyOpenness(const SkySamples& samples, std::span<const uint8_t> visible) {
-    CHECK(visible.empty() || visible.size() == samples.dir.size());
-    double total = 0, open = 0;
-    for (size_t k = 0; k < samples.dir.size(); ++k) {
-        total += samples.weight[k];
-        if (visible.empty() || visible[k])
-            open += samples.weight[k];
-    }
-    SkyVisibility r;
-    r.open_fraction = total > 0 ? open / total : 0;
-    r.bent = Normalize(SkyTransfer(samples, visible));
-    return r;
+    return dirs;
 }
 
 }  // namespace mebake::solve

@@ -1,6 +1,7 @@
 // Sky light: vector irradiance of a uniform and of the CIE standard overcast sky
-// (Moon & Spencer 1942, CIE S 011/E:2003 type 1: L(theta) = Lz (1 + 2 cos theta) / 3), and a
-// deterministic stratified direction set for visibility-weighted sky transfer.
+// (Moon & Spencer 1942, CIE S 011/E:2003 type 1: L(theta) = Lz (1 + 2 cos theta) / 3) in
+// closed form, the references the tests hold the solver and the path tracer to; and the
+// solver's stratified sky directions.
 //
 // Both skies are linear in cos theta = up.w over the upper hemisphere: L(w) = a + b (up.w),
 // zero below the horizon (no ground light). Closed forms (derived in the lune coordinates of
@@ -15,7 +16,6 @@
 #include "core/vec.h"
 
 #include <cstdint>
-#include <span>
 #include <vector>
 
 namespace mebake::solve {
@@ -35,24 +35,16 @@ Vec3d SkyVectorIrradiance(const SkyModel& sky);
 // Irradiance of an unoccluded receiver with unit normal n (clipped to its hemisphere).
 double SkyIrradiance(const SkyModel& sky, const Vec3d& n);
 
-// n directions over the sky's upper hemisphere (Fibonacci spiral: equal solid angle 2 pi / n,
-// stratified in up.w), each with weight L(w) * 2 pi / n. Deterministic for a given n.
-struct SkySamples {
-    std::vector<Vec3f> dir;
-    std::vector<float> weight;
-};
-SkySamples MakeSkySamples(const SkyModel& sky, int n);
-
-// sum_k V_k weight_k dir_k: the sky's vector irradiance at a point whose visibility of
-// direction k is V_k (visible empty = all visible). Fixed summation order.
-Vec3d SkyTransfer(const SkySamples& samples, std::span<const uint8_t> visible);
-
-// Unoccluded fraction (visible weight / total weight) and the bent normal (unit direction of
-// the visible vector irradiance; zero if nothing is visible).
-struct SkyVisibility {
-    double open_fraction = 0;
-    Vec3d bent;
-};
-SkyVisibility SkyOpenness(const SkySamples& samples, std::span<const uint8_t> visible);
+// The directions the solver traces the sky along (DirectLight), about +z (the caller
+// turns them to the sky's up axis): uniform over the upper hemisphere (each stands for
+// 2 pi / n of solid angle), stratified in z (k rings of equal area, at their midpoints) and
+// in azimuth (k per ring, each ring turned by the golden angle); k = round(sqrt(requested)),
+// at least 2. Not cosine-weighted about up: n . E for a tilted n weighs near-horizon
+// directions by tan(zenith) against that density, and an 11 x 11 cosine grid missed 24 % of
+// a vertical face's sky. At the default 128 directions the irradiance n . E of an open
+// receiver is exact facing up under a uniform sky (the rings' mean height is 1/2), within
+// 0.2 % under an overcast one, 0.6 % for tilts up to 120 degrees, 1.5 % to 165 and 3 % at
+// 170, where only a sliver of sky is above the horizon (sky_test.cpp).
+std::vector<Vec3f> SkyDirections(int requested);
 
 }  // namespace mebake::solve
