@@ -104,20 +104,15 @@ std::string SettingsText(const Scene& scene, const std::string& scene_file) {
         s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash);
 }
 
-}  // namespace
+using Clock = std::chrono::steady_clock;
 
-SolveStats RunSolveJob(const SolveJobOptions& opt) {
-    using Clock = std::chrono::steady_clock;
-    auto t0 = Clock::now();
-    ThreadLimit limit(opt.threads);
-    const MemoryBudget budget(opt.memory);
-    // Embree's allocations are capped for this solve (the render and the path tracer that
-    // may follow in the same process build other scenes and set no cap).
-    const EmbreeMemoryCap embree_cap(budget.EmbreeLimit());
-    stream::Manifest m = stream::ReadManifest(opt.dir);
-    if (m.state != "ingested")
-        UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", opt.dir,
-                   m.state);
+double Since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// The scene the solve uses: the scene file's (or the inputs' materials and the default
+// rig), with the command line's solver settings on top.
+Scene PrepareScene(const stream::Manifest& m, const SolveJobOptions& opt) {
     Scene scene = LoadScene(m, opt.scene_file);
     if (opt.order >= 0)
         scene.solver.order = opt.order;
@@ -129,166 +124,169 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         scene.solver.time_limit = opt.time_limit;
     scene.solver.radiosity = opt.radiosity;
     spdlog::info("scene: {}", scene.description);
+    return scene;
+}
 
-    // What a checkpoint or a finished solution must have been made from to be reused.
-    const uint64_t key = SolveKey(opt.dir, m.charts.size(), SettingsText(scene, opt.scene_file));
-    fs::create_directories(opt.dir + "/solve");
+// What --force, --resume and an existing checkpoint or solution mean: true when a finished
+// solution made from the same tiles and settings (`key`) is kept as it is.
+bool KeepFinishedSolution(const SolveJobOptions& opt, uint64_t key) {
     if (opt.force) {
         RemoveCheckpoints(opt.dir);
-    } else if (HasCheckpoint(opt.dir) && !opt.resume) {
+        return false;
+    }
+    if (HasCheckpoint(opt.dir) && !opt.resume)
         UsageError("{} holds the checkpoint of an interrupted solve; pass --resume to continue "
                    "it, or --force to start over",
                    opt.dir);
-    } else if (opt.resume && !HasCheckpoint(opt.dir) && fs::exists(SolutionPath(opt.dir))) {
-        const uint64_t had = ReadSolutionKey(SolutionPath(opt.dir));
-        if (had != key)
-            UsageError("{} was solved from other tiles or settings (order, tolerance, bounces, "
-                       "scene); pass --force to solve again",
-                       SolutionPath(opt.dir));
-        try {
-            ReadSolution(SolutionPath(opt.dir));  // every chunk's checksum
-            spdlog::info("{} is already solved with these settings; kept", opt.dir);
-            SolveStats done;
-            done.stop_reason = "already solved";
-            return done;
-        } catch (const Error& e) {
-            if (e.kind() != ErrorKind::Corrupt)
-                throw;
-            spdlog::warn("{}; solving again", e.what());
+    if (!opt.resume || HasCheckpoint(opt.dir) || !fs::exists(SolutionPath(opt.dir)))
+        return false;
+    const uint64_t had = ReadSolutionKey(SolutionPath(opt.dir));
+    if (had != key)
+        UsageError("{} was solved from other tiles or settings (order, tolerance, bounces, "
+                   "scene); pass --force to solve again",
+                   SolutionPath(opt.dir));
+    try {
+        ReadSolution(SolutionPath(opt.dir));  // every chunk's checksum
+        spdlog::info("{} is already solved with these settings; kept", opt.dir);
+        return true;
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Corrupt)
+            throw;
+        spdlog::warn("{}; solving again", e.what());
+        return false;
+    }
+}
+
+// Every chart's geometry pyramid, into `cache` (or into memory when null), tiles read a
+// batch at a time.
+void ReadGeometry(const std::string& dir, GeometryCache* cache, std::vector<SolveChart>* charts) {
+    const size_t batch = size_t(std::max(1, 2 * MaxThreads()));
+    std::vector<stream::ChartTile> tiles;
+    for (size_t first = 0; first < charts->size(); first += batch) {
+        tiles.assign(std::min(batch, charts->size() - first), {});
+        ParallelFor(0, int64_t(tiles.size()), [&](int64_t k) {
+            tiles[size_t(k)] = stream::ReadTile(stream::TilePath(dir, uint32_t(first) + uint32_t(k)),
+                                                stream::TileParts::GeometryImage);
+        });
+        for (size_t k = 0; k < tiles.size(); ++k) {
+            stream::ChartTile& tile = tiles[k];
+            SolveChart& sc = (*charts)[first + k];
+            if (cache)
+                CHECK_EQ(cache->Add(tile.geometry), first + k);
+            else
+                sc.geometry = GeometryPyramid(std::move(tile.geometry));
+            sc.scale = tile.meta.scale;
+            int level = 0;
+            while ((1u << level) < tile.meta.resolution)
+                ++level;
+            sc.max_level = level;
         }
     }
+    if (cache)
+        for (uint32_t c = 0; c < charts->size(); ++c)
+            (*charts)[c].geometry = cache->View(c);
+}
 
-    // Charts' geometry pyramids, in a memory-mapped file whose resident part stays under
-    // the budget's share beyond the pinned charts (geometry_cache.h): a pass over
-    // the charts faults evicted pyramids back from the page cache, which costs far less
-    // than the pyramids' memory. Tiles are read a batch at a time. Without room on disk
-    // for the file, the pyramids stay in memory (the same bytes, so the same solution).
+// Charts' geometry pyramids, in a memory-mapped file whose resident part stays under the
+// budget's share beyond the pinned charts (geometry_cache.h): a pass over the charts
+// faults evicted pyramids back from the page cache, which costs far less than the
+// pyramids' memory. Without room on disk for the file, the pyramids stay in memory (the
+// same bytes, so the same solution); the cache is then null.
+std::unique_ptr<GeometryCache> LoadCharts(const std::string& dir, const MemoryBudget& budget,
+                                          std::vector<SolveChart>* charts) {
     std::unique_ptr<GeometryCache> geometry;
-    std::vector<SolveChart> charts(m.charts.size());
-    auto load_charts = [&](GeometryCache* cache) {
-        const size_t batch = size_t(std::max(1, 2 * MaxThreads()));
-        std::vector<stream::ChartTile> tiles;
-        for (size_t first = 0; first < charts.size(); first += batch) {
-            tiles.assign(std::min(batch, charts.size() - first), {});
-            ParallelFor(0, int64_t(tiles.size()), [&](int64_t k) {
-                tiles[size_t(k)] =
-                    stream::ReadTile(stream::TilePath(opt.dir, uint32_t(first) + uint32_t(k)),
-                                     stream::TileParts::GeometryImage);
-            });
-            for (size_t k = 0; k < tiles.size(); ++k) {
-                stream::ChartTile& tile = tiles[k];
-                SolveChart& sc = charts[first + k];
-                if (cache)
-                    CHECK_EQ(cache->Add(tile.geometry), first + k);
-                else
-                    sc.geometry = GeometryPyramid(std::move(tile.geometry));
-                sc.scale = tile.meta.scale;
-                int level = 0;
-                while ((1u << level) < tile.meta.resolution)
-                    ++level;
-                sc.max_level = level;
-            }
-        }
-        if (cache)
-            for (uint32_t c = 0; c < charts.size(); ++c)
-                charts[c].geometry = cache->View(c);
-    };
     try {
-        geometry = std::make_unique<GeometryCache>(opt.dir + "/solve", budget.GeometryPyramids());
-        load_charts(geometry.get());
+        geometry = std::make_unique<GeometryCache>(dir + "/solve", budget.GeometryPyramids());
+        ReadGeometry(dir, geometry.get(), charts);
     } catch (const Error& e) {
         if (e.kind() != ErrorKind::Io)
             throw;
         spdlog::warn("{}; the geometry pyramids stay in memory", e.what());
         geometry.reset();
-        load_charts(nullptr);
+        ReadGeometry(dir, nullptr, charts);
     }
     LogMemory("geometry pyramids loaded");
+    return geometry;
+}
 
-    // Small emissive surfaces -> polygon lights.
+// Small emissive surfaces become exact polygon lights of the scene; returns true when they
+// are too large for that and must shoot their emission through the solver.
+bool AddEmissiveLights(const std::string& dir, const stream::Manifest& m, Scene* scene) {
     bool any_emissive = false;
-    for (const auto& mats : scene.per_input)
+    for (const auto& mats : scene->per_input)
         for (const auto& mat : mats)
             any_emissive |= mat.emissive();
-    bool shoot_emission = false;
-    if (any_emissive) {
-        std::vector<PolygonLight> lights;
-        for (uint32_t c = 0; c < m.charts.size() && lights.size() <= kMaxEmissiveTriangles; ++c) {
-            auto tile = stream::ReadTile(stream::TilePath(opt.dir, c), stream::TileParts::Mesh);
-            for (size_t t = 0; t < tile.triangles.size(); ++t) {
-                const Material& mat = scene.MaterialOf(tile.material[t]);
-                if (!mat.emissive())
-                    continue;
-                PolygonLight pl;
-                for (uint32_t v : tile.triangles[t])
-                    pl.vertices.push_back(Vec3d(tile.position[v]));
-                pl.radiance = Vec3d(mat.emission);
-                if (PolygonArea(pl.vertices) > 0)
-                    lights.push_back(pl);
-            }
-        }
-        if (lights.size() <= kMaxEmissiveTriangles) {
-            scene.lights.insert(scene.lights.end(), lights.begin(), lights.end());
-            spdlog::info("{} emissive triangles lit as exact polygon lights", lights.size());
-        } else {
-            shoot_emission = true;
-            spdlog::info("emissive surfaces shoot through the solver");
+    if (!any_emissive)
+        return false;
+    std::vector<PolygonLight> lights;
+    for (uint32_t c = 0; c < m.charts.size() && lights.size() <= kMaxEmissiveTriangles; ++c) {
+        auto tile = stream::ReadTile(stream::TilePath(dir, c), stream::TileParts::Mesh);
+        for (size_t t = 0; t < tile.triangles.size(); ++t) {
+            const Material& mat = scene->MaterialOf(tile.material[t]);
+            if (!mat.emissive())
+                continue;
+            PolygonLight pl;
+            for (uint32_t v : tile.triangles[t])
+                pl.vertices.push_back(Vec3d(tile.position[v]));
+            pl.radiance = Vec3d(mat.emission);
+            if (PolygonArea(pl.vertices) > 0)
+                lights.push_back(pl);
         }
     }
-
-    VisibilityScene vis;
-    LoadProxy(opt.dir, vis);
-    LogMemory("visibility scene built");
-    const double diag = Length(m.bbox_max - m.bbox_min);
-    SolveOptions so;
-    so.settings = scene.solver;
-    so.scene_size = float(diag);
-    so.ray_offset = float(diag * 2e-5 + m.proxy_deviation);
-    so.shoot_emission = shoot_emission;
-    spdlog::info("solving {} charts, order M{}, {}, tolerance {}", charts.size(), so.settings.order,
-                 so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
-
-    Solver solver(scene, charts, vis, so);
-    if (opt.resume && !opt.force) {
-        auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
-                                 charts.size());
-        if (cp) {
-            spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
-            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
-        }
+    if (lights.size() > kMaxEmissiveTriangles) {
+        spdlog::info("emissive surfaces shoot through the solver");
+        return true;
     }
-    StopSignals signals;
-    solver.SetStopFlag(&g_stop);
-    uint64_t checkpoints = 0, checkpoint_bytes = 0;
-    double checkpoint_seconds = 0;
-    auto last_checkpoint = Clock::now();
-    // A positive interval is stretched to 32 times the last checkpoint's duration, so
-    // checkpoints never take more than ~3% of the solve (large fields on slow disks).
-    double last_duration = 0;
-    solver.SetBatchHook([&](int next_batch) {
+    scene->lights.insert(scene->lights.end(), lights.begin(), lights.end());
+    spdlog::info("{} emissive triangles lit as exact polygon lights", lights.size());
+    return false;
+}
+
+// When to write a checkpoint at a batch boundary: on a stop signal, and every interval
+// seconds; a positive interval is stretched to 32 times the last checkpoint's duration,
+// so checkpoints never take more than ~3% of the solve (large fields on slow disks).
+class CheckpointSchedule {
+public:
+    CheckpointSchedule(const std::string& dir, double interval, uint64_t key)
+        : dir_(dir), interval_(interval), key_(key), last_(Clock::now()) {}
+
+    // The solver's batch hook: false stops the solve (after the checkpoint).
+    bool AtBoundary(const Solver& solver, int next_batch) {
         LogMemory(fmt::format("batch {}", next_batch - 1).c_str());
         const bool stop = g_stop.load();
-        const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint).count();
-        const double interval = opt.checkpoint_interval > 0
-                                    ? std::max(opt.checkpoint_interval, 32 * last_duration)
-                                    : opt.checkpoint_interval;
-        if (stop || (interval >= 0 && since >= interval)) {
+        const double interval =
+            interval_ > 0 ? std::max(interval_, 32 * last_duration_) : interval_;
+        if (stop || (interval >= 0 && Since(last_) >= interval)) {
             const auto t = Clock::now();
-            checkpoint_bytes = WriteCheckpoint(opt.dir, solver, key);
-            last_checkpoint = Clock::now();
-            const double secs = std::chrono::duration<double>(last_checkpoint - t).count();
-            last_duration = secs;
-            checkpoint_seconds += secs;
-            ++checkpoints;
-            spdlog::debug("checkpoint before batch {}: {} in {}", next_batch,
-                          FormatBytes(checkpoint_bytes), FormatSeconds(secs));
+            bytes = WriteCheckpoint(dir_, solver, key_);
+            last_ = Clock::now();
+            last_duration_ = std::chrono::duration<double>(last_ - t).count();
+            seconds += last_duration_;
+            ++count;
+            spdlog::debug("checkpoint before batch {}: {} in {}", next_batch, FormatBytes(bytes),
+                          FormatSeconds(last_duration_));
         }
         return !stop;
-    });
+    }
+
+    uint64_t count = 0, bytes = 0;
+    double seconds = 0;
+
+private:
+    std::string dir_;
+    double interval_;
+    uint64_t key_;
+    Clock::time_point last_;
+    double last_duration_ = 0;
+};
+
+// Runs the solver with a progress line on a terminal; throws Error(Cancelled) with what to
+// do next when a signal stopped it.
+void RunSolver(Solver& solver, const std::string& dir) {
     const bool tty = StderrIsTerminal();
-    auto t_run = Clock::now();
+    const auto t_run = Clock::now();
     solver.Run([&](int batch, double unshot, uint64_t rays) {
-        double secs = std::chrono::duration<double>(Clock::now() - t_run).count();
+        const double secs = Since(t_run);
         if (tty)
             std::fprintf(stderr, "\r  batch %d: unshot %.3g%%, %s rays, %s rays/s   ", batch,
                          unshot * 100, FormatCount(double(rays)).c_str(),
@@ -297,27 +295,22 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     if (tty)
         std::fprintf(stderr, "\n");
     LogMemory("solver finished");
-    const SolveStats& st = solver.stats();
-    if (st.stop_reason == "interrupted") {
-        if (solver.next_batch() < 0)
-            throw Error(ErrorKind::Cancelled,
-                        fmt::format("interrupted during the direct pass, before the first "
-                                    "checkpoint; run `mebake solve --resume {}` to solve again",
-                                    opt.dir));
+    if (solver.stats().stop_reason != "interrupted")
+        return;
+    if (solver.next_batch() < 0)
         throw Error(ErrorKind::Cancelled,
-                    fmt::format("interrupted; the solve is saved in {} (next batch {}); continue "
-                                "with `mebake solve --resume {}` or the same `mebake bake` command",
-                                CheckpointPath(opt.dir), solver.next_batch(), opt.dir));
-    }
-    double total = std::chrono::duration<double>(Clock::now() - t0).count();
-    spdlog::info("solved in {} ({} batches, {} rays, {} leaves, stop: {}, unshot {:.3g}%)",
-                 FormatSeconds(total), st.batches, FormatCount(double(st.rays)),
-                 FormatCount(double(st.leaves)), st.stop_reason,
-                 st.emitted_power > 0 ? 100 * st.unshot_power / st.emitted_power : 0.0);
+                    fmt::format("interrupted during the direct pass, before the first "
+                                "checkpoint; run `mebake solve --resume {}` to solve again",
+                                dir));
+    throw Error(ErrorKind::Cancelled,
+                fmt::format("interrupted; the solve is saved in {} (next batch {}); continue "
+                            "with `mebake solve --resume {}` or the same `mebake bake` command",
+                            CheckpointPath(dir), solver.next_batch(), dir));
+}
 
-    // Export and render shade with the same materials: keep the scene file beside the
-    // solution (without one, the inputs' materials and the default rig are rebuilt). It
-    // and the statistics go first: solution.bin is the commit point of the solve.
+// Export and render shade with the same materials: the scene file is kept beside the
+// solution (without one, the inputs' materials and the default rig are rebuilt).
+void KeepSceneFile(const SolveJobOptions& opt) {
     const std::string kept = opt.dir + "/solve/scene.json";
     if (!opt.scene_file.empty()) {
         fs::copy_file(opt.scene_file, kept + ".tmp", fs::copy_options::overwrite_existing);
@@ -325,11 +318,15 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     } else {
         fs::remove(kept);
     }
+}
 
+nlohmann::json StatsJson(const SolveJobOptions& opt, const SolveOptions& so, size_t charts,
+                         const SolveStats& st, double total, const GeometryCache* geometry,
+                         const CheckpointSchedule& checkpoints) {
     nlohmann::json j;
     j["order"] = so.settings.order;
     j["unknown"] = so.settings.radiosity ? "radiosity" : "irradiance";
-    j["charts"] = charts.size();
+    j["charts"] = charts;
     j["batches"] = st.batches;
     j["shots"] = st.shots;
     j["rays"] = st.rays;
@@ -359,11 +356,76 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     j["emitted_power"] = st.emitted_power;
     j["unshot_power"] = st.unshot_power;
     j["stop_reason"] = st.stop_reason;
-    j["checkpoints"] = {{"count", checkpoints},
-                        {"bytes", checkpoint_bytes},
-                        {"seconds", checkpoint_seconds},
+    j["checkpoints"] = {{"count", checkpoints.count},
+                        {"bytes", checkpoints.bytes},
+                        {"seconds", checkpoints.seconds},
                         {"interval", opt.checkpoint_interval}};
-    std::string text = j.dump(2) + "\n";
+    return j;
+}
+
+}  // namespace
+
+SolveStats RunSolveJob(const SolveJobOptions& opt) {
+    const auto t0 = Clock::now();
+    ThreadLimit limit(opt.threads);
+    const MemoryBudget budget(opt.memory);
+    // Embree's allocations are capped for this solve (the render and the path tracer that
+    // may follow in the same process build other scenes and set no cap).
+    const EmbreeMemoryCap embree_cap(budget.EmbreeLimit());
+    stream::Manifest m = stream::ReadManifest(opt.dir);
+    if (m.state != "ingested")
+        UsageError("{}: ingest did not finish (state '{}'); run `mebake ingest` again", opt.dir,
+                   m.state);
+    Scene scene = PrepareScene(m, opt);
+    // What a checkpoint or a finished solution must have been made from to be reused.
+    const uint64_t key = SolveKey(opt.dir, m.charts.size(), SettingsText(scene, opt.scene_file));
+    fs::create_directories(opt.dir + "/solve");
+    if (KeepFinishedSolution(opt, key)) {
+        SolveStats done;
+        done.stop_reason = "already solved";
+        return done;
+    }
+    std::vector<SolveChart> charts(m.charts.size());
+    const std::unique_ptr<GeometryCache> geometry = LoadCharts(opt.dir, budget, &charts);
+    const bool shoot_emission = AddEmissiveLights(opt.dir, m, &scene);
+
+    VisibilityScene vis;
+    LoadProxy(opt.dir, vis);
+    LogMemory("visibility scene built");
+    const double diag = Length(m.bbox_max - m.bbox_min);
+    SolveOptions so;
+    so.settings = scene.solver;
+    so.scene_size = float(diag);
+    so.ray_offset = float(diag * 2e-5 + m.proxy_deviation);
+    so.shoot_emission = shoot_emission;
+    spdlog::info("solving {} charts, order M{}, {}, tolerance {}", charts.size(), so.settings.order,
+                 so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
+
+    Solver solver(scene, charts, vis, so);
+    if (opt.resume && !opt.force) {
+        auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
+                                 charts.size());
+        if (cp) {
+            spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
+            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        }
+    }
+    StopSignals signals;
+    solver.SetStopFlag(&g_stop);
+    CheckpointSchedule checkpoints(opt.dir, opt.checkpoint_interval, key);
+    solver.SetBatchHook([&](int next_batch) { return checkpoints.AtBoundary(solver, next_batch); });
+    RunSolver(solver, opt.dir);
+    const SolveStats& st = solver.stats();
+    const double total = Since(t0);
+    spdlog::info("solved in {} ({} batches, {} rays, {} leaves, stop: {}, unshot {:.3g}%)",
+                 FormatSeconds(total), st.batches, FormatCount(double(st.rays)),
+                 FormatCount(double(st.leaves)), st.stop_reason,
+                 st.emitted_power > 0 ? 100 * st.unshot_power / st.emitted_power : 0.0);
+
+    // The scene file and the statistics go first: solution.bin is the commit point.
+    KeepSceneFile(opt);
+    const std::string text =
+        StatsJson(opt, so, charts.size(), st, total, geometry.get(), checkpoints).dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
         if (path.empty())
             continue;
@@ -374,9 +436,9 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     WriteSolution(SolutionPath(opt.dir), solver.fields(), so.settings.radiosity, key);
     RemoveCheckpoints(opt.dir);
     io::SyncDirectory(opt.dir + "/solve");
-    if (checkpoints)
-        spdlog::info("{} checkpoints of {} took {}", checkpoints, FormatBytes(checkpoint_bytes),
-                     FormatSeconds(checkpoint_seconds));
+    if (checkpoints.count)
+        spdlog::info("{} checkpoints of {} took {}", checkpoints.count,
+                     FormatBytes(checkpoints.bytes), FormatSeconds(checkpoints.seconds));
     return st;
 }
 
