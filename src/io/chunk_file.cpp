@@ -1,7 +1,6 @@
 #include "io/chunk_file.h"
 
 #include <fcntl.h>
-#include <lz4.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -14,6 +13,7 @@
 
 #include "core/checksum.h"
 #include "core/error.h"
+#include "io/lz4_block.h"
 
 namespace mebake::io {
 
@@ -21,8 +21,6 @@ namespace {
 constexpr uint32_t kMagic = 0x4B42454D;  // "MEBK"
 constexpr uint64_t kAlign = 64;
 constexpr uint32_t kCodecStored = 0, kCodecLz4 = 1;
-// LZ4 works on int-sized blocks; larger chunks are split into blocks of this size.
-constexpr uint64_t kLz4Block = uint64_t(1) << 30;
 
 struct Header {
     uint32_t magic, kind, version, chunk_count;
@@ -106,20 +104,8 @@ void ChunkWriter::Add(uint32_t tag, uint32_t index, std::span<const uint8_t> byt
     Entry e{tag, index, kCodecStored, 0, AlignUp(offset_), 0, bytes.size()};
     std::span<const uint8_t> stored = bytes;
     if (compress && bytes.size() > 64) {
-        // Blocks of at most kLz4Block raw bytes, each prefixed by its compressed size.
         scratch_.clear();
-        for (uint64_t at = 0; at < bytes.size(); at += kLz4Block) {
-            int raw = int(std::min<uint64_t>(kLz4Block, bytes.size() - at));
-            int bound = LZ4_compressBound(raw);
-            size_t base = scratch_.size();
-            scratch_.resize(base + 4 + size_t(bound));
-            int n = LZ4_compress_default(reinterpret_cast<const char*>(bytes.data() + at),
-                                         scratch_.data() + base + 4, raw, bound);
-            if (n <= 0) IoError({path_}, "LZ4 compression failed for chunk {}", TagName(tag));
-            uint32_t n32 = uint32_t(n);
-            std::memcpy(scratch_.data() + base, &n32, 4);
-            scratch_.resize(base + 4 + size_t(n));
-        }
+        AppendLz4(bytes, &scratch_);
         if (scratch_.size() < bytes.size()) {
             e.codec = kCodecLz4;
             stored = {reinterpret_cast<const uint8_t*>(scratch_.data()), scratch_.size()};
@@ -242,21 +228,7 @@ std::vector<uint8_t> ChunkReader::Read(uint32_t tag, uint32_t index) const {
     if (e->raw_size > (uint64_t(1) << 40))
         CorruptError({path_, e->offset}, "chunk {}[{}] claims an absurd size", TagName(tag), index);
     std::vector<uint8_t> raw(e->raw_size);
-    uint64_t in = 0, out = 0;
-    while (out < e->raw_size) {
-        uint32_t n = 0;
-        if (in + 4 > stored.size()) break;
-        std::memcpy(&n, stored.data() + in, 4);
-        in += 4;
-        int want = int(std::min<uint64_t>(kLz4Block, e->raw_size - out));
-        if (n > stored.size() - in) break;
-        int got = LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data() + in),
-                                      reinterpret_cast<char*>(raw.data() + out), int(n), want);
-        if (got != want) break;
-        in += n;
-        out += uint64_t(got);
-    }
-    if (out != e->raw_size || in != stored.size())
+    if (!DecodeLz4(stored, raw))
         CorruptError({path_, e->offset}, "chunk {}[{}] does not decompress", TagName(tag), index);
     return raw;
 }

@@ -4,8 +4,8 @@
 #include "core/checksum.h"
 #include "core/error.h"
 #include "core/paged_file.h"
+#include "io/lz4_block.h"
 
-#include <lz4.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -51,7 +51,8 @@ struct CellMapper {
     }
 };
 
-// Appends LZ4 blocks to a brick file: [u32 raw bytes][u32 stored bytes][u32 crc][data].
+// Appends blocks to a brick file: [u32 raw bytes][u32 stored bytes][u32 crc][stored bytes
+// in the LZ4 framing of io/lz4_block.h].
 class BrickFile {
 public:
     BrickFile(std::string path, size_t flush_bytes)
@@ -73,14 +74,15 @@ public:
         if (fd_ < 0)
             IoError({path_}, "cannot create: {}", ErrnoString(errno));
         created_ = true;
-        int raw = int(buffer_.size() * sizeof(BrickFace));
-        std::vector<char> out(12 + size_t(LZ4_compressBound(raw)));
-        int n = LZ4_compress_default(reinterpret_cast<const char*>(buffer_.data()), out.data() + 12,
-                                     raw, int(out.size() - 12));
-        CHECK_GT(n, 0);
-        uint32_t head[3] = {uint32_t(raw), uint32_t(n), Crc32(out.data() + 12, size_t(n))};
+        // A block: [raw size u32][stored size u32][CRC-32 of the stored bytes] and the
+        // stored bytes in the one LZ4 framing (io/lz4_block.h).
+        const size_t raw = buffer_.size() * sizeof(BrickFace);
+        std::vector<char> out(12);
+        io::AppendLz4({reinterpret_cast<const uint8_t*>(buffer_.data()), raw}, &out);
+        const size_t n = out.size() - 12;
+        const uint32_t head[3] = {uint32_t(raw), uint32_t(n), Crc32(out.data() + 12, n)};
         std::memcpy(out.data(), head, 12);
-        size_t total = 12 + size_t(n), done = 0;
+        size_t total = out.size(), done = 0;
         while (done < total) {
             ssize_t w = ::write(fd_, out.data() + done, total - done);
             if (w < 0 && errno == EINTR)
@@ -244,9 +246,8 @@ std::vector<BrickFace> ReadBrick(const std::string& dir, uint32_t brick) {
         }
         size_t at = out.size();
         out.resize(at + head[0] / sizeof(BrickFace));
-        int got = LZ4_decompress_safe(block.data(), reinterpret_cast<char*>(out.data() + at),
-                                      int(head[1]), int(head[0]));
-        if (got != int(head[0])) {
+        if (!io::DecodeLz4({reinterpret_cast<const uint8_t*>(block.data()), head[1]},
+                           {reinterpret_cast<uint8_t*>(out.data() + at), head[0]})) {
             ::close(fd);
             CorruptError({path, offset}, "block does not decompress");
         }
