@@ -229,6 +229,26 @@ int main(int argc, char** argv) {
     bk_cmd->add_flag("-f,--force", bk.force,
                      "Start over in an existing directory (without it, a bake resumes there)");
 
+    // An example line under every --help (README, "Use", has more).
+    app.footer(
+        "Examples:\n"
+        "  mebake bake scan.ply -o out/          ingest + solve + export + render, defaults\n"
+        "  mebake info scan.ply                  what a mesh holds\n"
+        "  mebake <command> --help               every option of a command");
+    info_cmd->footer("Example:\n  mebake info scan.ply\n  mebake convert scan.obj - | mebake info -");
+    conv_cmd->footer("Example:\n  mebake convert scan.obj scan.ply --float-colors");
+    ing_cmd->footer("Example:\n  mebake ingest a.ply b.obj -o scene.mebake --memory 2G");
+    sol_cmd->footer("Example:\n  mebake solve scene.mebake --scene lights.json --order 2\n"
+                    "  mebake solve scene.mebake --resume    (after an interruption)");
+    ref_cmd->footer("Example:\n  mebake reference scene.mebake --points 2000 -o ref.json");
+    cmp_cmd->footer("Example:\n  mebake compare scene.mebake ref.json");
+    exp_cmd->footer("Example:\n  mebake export scene.mebake --lightmap lm.exr --mesh lit.glb "
+                    "--vertex-colors lit.ply");
+    ren_cmd->footer("Example:\n  mebake render scene.mebake --eye 0,1,3 --target 0,0,0 -o view.png "
+                    "--glossy");
+    bk_cmd->footer("Example:\n  mebake bake scan.ply -o out/    (rerun the same command to resume)\n"
+                   "  tools/mkscan --triangles 1000000 | mebake bake - -o out/");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -117,6 +117,32 @@ TEST(Cli, BadInputAndUsageGiveClearErrorsAndExitCodes) {
     fs::remove_all(tmp);
 }
 
+TEST(Cli, EveryHelpShowsAnExampleThatParses) {
+    const auto top = Capture(kBin + " --help");
+    EXPECT_EQ(top.code, 0);
+    EXPECT_NE(top.out.find("Examples:\n  mebake bake"), std::string::npos) << top.out;
+    for (const char* cmd : {"info", "convert", "ingest", "solve", "reference", "compare", "export",
+                            "render", "bake"}) {
+        const auto r = Capture(kBin + " " + cmd + " --help");
+        EXPECT_EQ(r.code, 0) << cmd;
+        const size_t at = r.out.find("Example:\n  mebake " + std::string(cmd) + " ");
+        ASSERT_NE(at, std::string::npos) << cmd << ":\n" << r.out;
+        // The example's options exist: run in an empty directory, it fails on the missing
+        // files (a runtime error), never on its options (CLI11's "Run with --help").
+        std::string line = r.out.substr(at + 11);
+        line = line.substr(0, line.find('\n'));
+        line = line.substr(0, line.find("  ("));  // a trailing remark in parentheses
+        const fs::path tmp = fs::temp_directory_path() /
+                             ("mebake-cli-example-" + std::to_string(::getpid()) + "-" + cmd);
+        fs::create_directories(tmp);
+        const auto run = Capture("cd '" + tmp.string() + "' && '" + kBin + "'" + line.substr(6) +
+                                 " < /dev/null 2>&1");
+        EXPECT_EQ(run.out.find("Run with --help"), std::string::npos) << line << ": " << run.out;
+        EXPECT_NE(run.code, 2) << line << ": " << run.out;
+        fs::remove_all(tmp);
+    }
+}
+
 TEST(Cli, BakeSampleEndToEnd) {
     fs::path tmp = fs::temp_directory_path() / ("mebake-cli-bake-" + std::to_string(::getpid()));
     std::string sample = std::string(MEBAKE_SOURCE_DIR) + "/data/samples/terrain.ply";
