@@ -7,6 +7,7 @@
 #include "io/byte_stream.h"
 #include "output/bake_view.h"
 #include "output/export_mesh.h"
+#include "output/node_seams.h"
 #include "output/seams.h"
 #include "output/vertex_colors.h"
 
@@ -139,11 +140,25 @@ void RunExportJob(const ExportJobOptions& c) {
                       {"p95_relative_jump", s.p95_relative},
                       {"max_relative_jump", s.max_relative},
                       {"mean_level", s.mean_level},
-                      {"worst_edge", {s.worst_v0, s.worst_v1}}};
+                      {"worst_edge", {s.worst_v0, s.worst_v1}},
+                      {"display_jump", {{"mean", s.display.mean},
+                                        {"p95", s.display.p95},
+                                        {"max", s.display.max}}}};
+        const NodeSeamStats ns = MeasureNodeSeams(view);
+        j["node_seams"] = {{"edges", ns.edges},
+                           {"samples", ns.display.samples},
+                           {"display_jump", {{"mean", ns.display.mean},
+                                             {"p95", ns.display.p95},
+                                             {"max", ns.display.max}}}};
         spdlog::info(
             "seams: {} edges ({} on folds not measured), relative jump mean {:.3g}, p95 {:.3g}, "
             "max {:.3g}",
             s.seam_edges, s.fold_edges, s.mean_relative, s.p95_relative, s.max_relative);
+        spdlog::info("display jumps (tone-mapped sRGB, 0..1): chart borders mean {:.4f}, p95 "
+                     "{:.4f}, max {:.4f}; node borders ({} edges) mean {:.4f}, p95 {:.4f}, max "
+                     "{:.4f}",
+                     s.display.mean, s.display.p95, s.display.max, ns.edges, ns.display.mean,
+                     ns.display.p95, ns.display.max);
     }
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;

@@ -113,6 +113,7 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     };
     std::vector<Sample> samples;
     std::vector<std::pair<uint64_t, uint64_t>> compared;
+    JumpStats display;
     SeamStats st;
     ForEachTile(
         view, AllCharts(view), stream::TileParts::Mesh,
@@ -139,6 +140,7 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
                 for (size_t k = 0; k < ns; ++k) {
                     const float y1 = it->second.y[k], y2 = e.y[k];
                     samples.push_back({std::abs(y1 - y2), 0.5f * (y1 + y2), edge});
+                    display.Add(y1, y2);
                 }
                 waiting.erase(it);
             }
@@ -146,6 +148,7 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     st.seam_edges = compared.size();
     st.open_edges = waiting.size();
     st.samples = samples.size();
+    st.display = display.Summary();
     if (samples.empty())
         return st;
     double level = 0;

@@ -8,7 +8,8 @@
 // from the lower to the higher vertex id) B is evaluated on each side with that side's own
 // uv, normal, colour and material (ChartShader::AtTriangle), and the jump of luminance Y
 // (Rec. 709 weights) is compared with the local level:
-//   relative jump = |Y1 - Y2| / max((Y1 + Y2) / 2, 1e-3 x mean level over all samples).
+//   relative jump = |Y1 - Y2| / max((Y1 + Y2) / 2, 1e-3 x mean level over all samples),
+// and in display terms (jump_stats.h), which near-black places do not blow up.
 // Edges where the surface itself folds (faces more than 45 degrees apart, a box's edge)
 // are counted but not measured: B is discontinuous there in any correct solution.
 // An edge in more than two charts (non-manifold input) compares the first two; a third
@@ -18,6 +19,7 @@
 #pragma once
 
 #include "output/bake_view.h"
+#include "output/jump_stats.h"
 
 #include <cstdint>
 
@@ -37,6 +39,7 @@ struct SeamStats {
     double max_relative = 0;
     double mean_level = 0;                // mean luminance of B on seams (W/m^2)
     uint64_t worst_v0 = 0, worst_v1 = 0;  // global vertex ids of the worst edge
+    JumpSummary display;                  // the same samples in display terms (jump_stats.h)
 };
 
 SeamStats MeasureSeams(const BakeView& view, const SeamOptions& options = {});

@@ -2,6 +2,8 @@
 // edge, the analytic jump for a discontinuous one, and the edge counts.
 #include "output/seams.h"
 
+#include "output/node_seams.h"
+#include "output/tonemap.h"
 #include "support/bake_fixture.h"
 
 #include <gtest/gtest.h>
@@ -31,6 +33,12 @@ TEST_F(SeamTest, ContinuousFieldHasNoSeam) {
     EXPECT_NEAR(s.mean_relative, 0, 1e-6);
     EXPECT_NEAR(s.max_relative, 0, 1e-6);
     EXPECT_NEAR(s.mean_level, solve::testing::kAlbedo * 3, 1e-5);
+    EXPECT_NEAR(s.display.max, 0, 1e-6);
+}
+
+// What a viewer sees of a luminance y of B: the default tone map of y / pi, sRGB-encoded.
+double Shown(double y) {
+    return EncodeSrgb(ApplyToneCurve(float(y / M_PI), ToneMap{}));
 }
 
 TEST_F(SeamTest, DiscontinuousFieldJumps) {
@@ -47,10 +55,41 @@ TEST_F(SeamTest, DiscontinuousFieldJumps) {
     EXPECT_NEAR(s.mean_relative, 2.0 / 3.0, 1e-5);
     EXPECT_NEAR(s.max_relative, 2.0 / 3.0, 1e-5);
     EXPECT_NEAR(s.p95_relative, 2.0 / 3.0, 1e-5);
+    const double shown = Shown(2.0) - Shown(1.0);
+    EXPECT_GT(shown, 0.05);
+    EXPECT_NEAR(s.display.mean, shown, 1e-6);
+    EXPECT_NEAR(s.display.p95, shown, 1e-4);  // a histogram of 1e-4 bins
     EXPECT_EQ(s.worst_v0, 1u);
     EXPECT_EQ(s.worst_v1, 4u);
     so.samples = 0;
     EXPECT_THROW(MeasureSeams(OpenBakeView(dir_), so), Error);
+}
+
+TEST_F(SeamTest, NodeBordersOfAContinuousFieldDoNotJump) {
+    solve::testing::TinyBakeOptions o;
+    o.light[0] = {Vec3f(1, 1, 1), Vec3f(2, 2, 2)};
+    o.light[1] = {Vec3f(3, 3, 3), Vec3f(2, 2, 2)};
+    o.subdivide = 2;  // 16 leaves per chart, each the restriction of the linear field
+    solve::testing::WriteTinyBake(dir_, o);
+    const NodeSeamStats s = MeasureNodeSeams(OpenBakeView(dir_));
+    EXPECT_EQ(s.edges, 2u * 24u);  // per chart: 3 inner lines x 4 leaves x 2 directions
+    EXPECT_EQ(s.display.samples, 2u * 24u * 3u);
+    EXPECT_LT(s.display.max, 1e-4);
+}
+
+TEST_F(SeamTest, NodeBordersOfOneBrighterLeafJumpByItsStep) {
+    solve::testing::TinyBakeOptions o;
+    o.light[0] = o.light[1] = {Vec3f(2, 2, 2), Vec3f(0, 0, 0)};
+    o.subdivide = 1;
+    o.leaf_step = 2;  // chart 0's first leaf: E_z 4 instead of 2, so B 2 instead of 1
+    solve::testing::WriteTinyBake(dir_, o);
+    const NodeSeamStats s = MeasureNodeSeams(OpenBakeView(dir_));
+    // Per chart 4 inner edges x 3 samples; the bright leaf's 2 inner edges jump.
+    ASSERT_EQ(s.display.samples, 24u);
+    const double shown = Shown(2.0) - Shown(1.0);
+    EXPECT_NEAR(s.display.max, shown, 1e-5);
+    EXPECT_NEAR(s.display.mean, shown * 6 / 24, 1e-5);
+    EXPECT_NEAR(s.display.p95, shown, 1e-4);
 }
 
 }  // namespace

@@ -42,6 +42,8 @@ struct TinyBakeOptions {
     int order = 1;
     ChartLight light[2];
     bool hole_fill_last = false;  // chart 1's second triangle is a hole fill (face id kNoId)
+    int subdivide = 0;            // levels of uniform subdivision of each field (continuous)
+    float leaf_step = 0;          // then added to E_z of chart 0's first leaf (a jump)
 };
 
 inline std::string FreshDir(const std::string& name) {
@@ -152,6 +154,19 @@ inline void WriteTinyBake(const std::string& dir, const TinyBakeOptions& o) {
             z[0] = o.light[c].a[k] + o.light[c].b[k] / 2;
             if (o.order >= 1)
                 z[CoeffIndex(o.order, 1, 0)] = o.light[c].b[k] / (2 * std::sqrt(3.f));
+        }
+        for (int l = 0; l < o.subdivide; ++l) {
+            const size_t nodes = f.node_count();
+            for (size_t k = 0; k < nodes; ++k)
+                if (f.node(k).leaf())
+                    f.Subdivide(k);
+        }
+        if (c == 0 && o.leaf_step != 0) {
+            size_t first = 0;
+            while (!f.node(first).leaf())
+                first = size_t(f.node(first).first_child);
+            for (int k = 0; k < 3; ++k)
+                f.value(first)[(3 * k + 2) * n] += o.leaf_step;
         }
         fields.push_back(std::move(f));
     }
