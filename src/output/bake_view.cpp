@@ -77,7 +77,9 @@ std::vector<uint32_t> AllCharts(const BakeView& view) {
 
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
-    : tile_(tile), field_(field), radiosity_(radiosity_unknown), scene_(scene) {
+    : tile_(tile), field_(field),
+      display_(field, 1.0 / double(std::max<uint32_t>(1, tile.meta.resolution))),
+      radiosity_(radiosity_unknown), scene_(scene) {
     default_material_.use_vertex_colors = true;
     for (size_t t = 0; t < tile.material.size(); ++t) {
         const uint32_t packed = tile.material[t];
@@ -158,7 +160,9 @@ ShadingPoint ChartShader::AtVertex(uint32_t v) const {
 }
 
 Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
-    Vec3f b = solve::ShadeRadiosity(field_, radiosity_, p.uv.x, p.uv.y, p.normal, p.albedo, *p.material);
+    float val[9];
+    display_.Eval(p.uv.x, p.uv.y, val);
+    Vec3f b = solve::ShadeRadiosity(val, radiosity_, p.normal, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(b[c]));
         b[c] = std::max(0.f, b[c]);
@@ -167,8 +171,9 @@ Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
 }
 
 Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
-    Vec3f l =
-        solve::ShadeGlossy(field_, radiosity_, p.uv.x, p.uv.y, p.normal, view, p.albedo, *p.material);
+    float val[9];
+    display_.Eval(p.uv.x, p.uv.y, val);
+    Vec3f l = solve::ShadeGlossy(val, radiosity_, p.normal, view, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(l[c]));
         l[c] = std::max(0.f, l[c]);
@@ -177,7 +182,9 @@ Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
 }
 
 void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
-    solve::VectorIrradianceAt(field_, radiosity_, uv.x, uv.y, e);
+    float val[9];
+    display_.Eval(uv.x, uv.y, val);
+    solve::VectorIrradianceAt(val, radiosity_, e);
     for (int c = 0; c < 3; ++c)
         CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
 }

@@ -8,11 +8,13 @@
 // triangle's material) and E from the chart's field at the same chart point. A point of the
 // master element's virtual part takes normal, colour and material from its nearest real
 // point (the seed paper's "nearest real triangle"), while E is still evaluated where the
-// point is, so texels that straddle the chart's outline filter smoothly.
+// point is, so texels that straddle the chart's outline filter smoothly. E is the chart's
+// field as continuous_field.h reconstructs it: C0 across quadtree node borders.
 #pragma once
 
 #include "core/parallel.h"
 #include "core/vec.h"
+#include "output/continuous_field.h"
 #include "solve/field.h"
 #include "solve/scene.h"
 #include "solve/solution.h"
@@ -129,6 +131,7 @@ private:
 
     const stream::ChartTile& tile_;
     const ChartField& field_;
+    ContinuousField display_;  // the field as shown: C0 across node borders
     bool radiosity_;
     const Scene& scene_;
     std::vector<uint32_t> vertex_triangle_;  // lowest triangle using each vertex

@@ -20,10 +20,8 @@ Vec3f SurfaceAlbedo(const Material& m, const Vec3f& color) {
     return a;
 }
 
-Vec3f ShadeRadiosity(const ChartField& field, bool radiosity_unknown, double u, double v,
-                     const Vec3f& n, const Vec3f& albedo, const Material& m) {
-    float val[9];
-    field.EvalValue(u, v, val);
+Vec3f ShadeRadiosity(const float* val, bool radiosity_unknown, const Vec3f& n,
+                     const Vec3f& albedo, const Material& m) {
     Vec3f b = m.emission * kPi;
     for (int c = 0; c < 3; ++c) {
         if (radiosity_unknown) {
@@ -36,23 +34,20 @@ Vec3f ShadeRadiosity(const ChartField& field, bool radiosity_unknown, double u, 
     return b;
 }
 
-void VectorIrradianceAt(const ChartField& field, bool radiosity_unknown, double u, double v,
-                        Vec3f e[3]) {
+void VectorIrradianceAt(const float* val, bool radiosity_unknown, Vec3f e[3]) {
     if (radiosity_unknown) {
         e[0] = e[1] = e[2] = Vec3f{};
         return;
     }
-    float val[9];
-    field.EvalValue(u, v, val);
     for (int c = 0; c < 3; ++c) e[c] = Vec3f(val[3 * c], val[3 * c + 1], val[3 * c + 2]);
 }
 
-Vec3f ShadeGlossy(const ChartField& field, bool radiosity_unknown, double u, double v,
-                  const Vec3f& n, const Vec3f& view, const Vec3f& albedo, const Material& m) {
-    Vec3f diffuse = ShadeRadiosity(field, radiosity_unknown, u, v, n, albedo, m) / kPi;
+Vec3f ShadeGlossy(const float* val, bool radiosity_unknown, const Vec3f& n, const Vec3f& view,
+                  const Vec3f& albedo, const Material& m) {
+    Vec3f diffuse = ShadeRadiosity(val, radiosity_unknown, n, albedo, m) / kPi;
     if (m.glossy_exponent <= 0 || m.glossy_weight <= 0 || radiosity_unknown) return diffuse;
     Vec3f e[3];
-    VectorIrradianceAt(field, radiosity_unknown, u, v, e);
+    VectorIrradianceAt(val, radiosity_unknown, e);
     Vec3f out = diffuse * (1 - m.glossy_weight);
     for (int c = 0; c < 3; ++c) {
         float mag = Length(e[c]);

@@ -1,0 +1,63 @@
+#include "output/continuous_field.h"
+
+#include "core/check.h"
+#include "solve/basis.h"
+
+#include <algorithm>
+#include <array>
+
+namespace mebake::output {
+
+ContinuousField::ContinuousField(const solve::ChartField& field, double max_delta)
+    : field_(field) {
+    double smallest = 1;
+    for (const solve::QuadNode& n : field.nodes())
+        if (n.leaf())
+            smallest = std::min(smallest, n.size());
+    delta_ = std::min(0.5 * smallest, max_delta);
+}
+
+void ContinuousField::Eval(double u, double v, float* out) const {
+    u = std::clamp(u, 0.0, 1.0);
+    v = std::clamp(v, 0.0, 1.0);
+    const double u0 = std::max(0.0, u - delta_), u1 = std::min(1.0, u + delta_);
+    const double v0 = std::max(0.0, v - delta_), v1 = std::min(1.0, v + delta_);
+    // The leaves at the box's corners cover it (each is at least 2 delta wide).
+    std::array<size_t, 4> leaves{};
+    int count = 0;
+    for (const double cv : {v0, v1})
+        for (const double cu : {u0, u1}) {
+            double s, t;
+            const size_t n = field_.LeafAt(cu, cv, &s, &t);
+            if (std::find(leaves.begin(), leaves.begin() + count, n) == leaves.begin() + count)
+                leaves[size_t(count++)] = n;
+        }
+    const int blocks = field_.blocks();
+    if (count == 1) {  // inside one leaf: its own fit, as ChartField::EvalValue gives it
+        field_.EvalValue(u, v, out);
+        return;
+    }
+    std::fill(out, out + blocks, 0.f);
+    double total = 0;
+    float part[9];
+    CHECK_LE(blocks, 9);
+    for (int k = 0; k < count; ++k) {
+        const solve::QuadNode& node = field_.node(leaves[size_t(k)]);
+        const double lo_u = node.U(0), hi_u = node.U(1), lo_v = node.V(0), hi_v = node.V(1);
+        const double w = std::max(0.0, std::min(u1, hi_u) - std::max(u0, lo_u)) *
+                         std::max(0.0, std::min(v1, hi_v) - std::max(v0, lo_v));
+        if (w <= 0)
+            continue;
+        // Node-local coordinates of (u, v), unclamped: the polynomial extended past its node.
+        const double s = u / node.size() - node.i, t = v / node.size() - node.j;
+        solve::EvalCoeffs(field_.order(), field_.value(leaves[size_t(k)]), blocks, s, t, part);
+        for (int b = 0; b < blocks; ++b)
+            out[b] += float(w) * part[b];
+        total += w;
+    }
+    CHECK_GT(total, 0.0);
+    for (int b = 0; b < blocks; ++b)
+        out[b] = float(out[b] / total);
+}
+
+}  // namespace mebake::output
