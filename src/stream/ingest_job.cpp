@@ -152,8 +152,9 @@ std::string CheckIngestReusable(const IngestOptions& c) {
     }
     const auto want = IngestOptionsRecord(c);
     for (const auto& [key, value] : want) {
+        const std::string& name = key;  // clang 14 cannot capture a structured binding
         auto it = std::find_if(m.options.begin(), m.options.end(),
-                               [&](const auto& kv) { return kv.first == key; });
+                               [&](const auto& kv) { return kv.first == name; });
         const std::string had = it == m.options.end() ? "(none)" : it->second;
         if (had != value)
             UsageError("{} was ingested with {} {}, this run asks for {}; pass --force to start "
