@@ -12,9 +12,9 @@
 namespace mebake {
 
 struct MemoryShare {
-    std::string name;   // stage.pool
+    std::string name;  // stage.pool
     uint64_t bytes = 0;
-    std::string rule;   // how it is derived from the budget
+    std::string rule;  // how it is derived from the budget
 };
 
 class MemoryBudget {

@@ -2,9 +2,10 @@
 
 #include "core/check.h"
 
+#include <lz4.h>
+
 #include <algorithm>
 #include <cstring>
-#include <lz4.h>
 
 namespace mebake::io {
 
@@ -34,9 +35,9 @@ bool DecodeLz4(std::span<const uint8_t> stored, std::span<uint8_t> raw) {
         const int want = int(std::min<uint64_t>(kLz4BlockMax, raw.size() - out));
         if (n > stored.size() - in)
             return false;
-        const int got = LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data() + in),
-                                            reinterpret_cast<char*>(raw.data() + out), int(n),
-                                            want);
+        const int got =
+            LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data() + in),
+                                reinterpret_cast<char*>(raw.data() + out), int(n), want);
         if (got != want)
             return false;
         in += n;

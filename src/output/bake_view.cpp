@@ -77,9 +77,11 @@ std::vector<uint32_t> AllCharts(const BakeView& view) {
 
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
-    : tile_(tile), field_(field),
+    : tile_(tile),
+      field_(field),
       display_(field, 1.0 / double(std::max<uint32_t>(1, tile.meta.resolution))),
-      radiosity_(radiosity_unknown), scene_(scene) {
+      radiosity_(radiosity_unknown),
+      scene_(scene) {
     default_material_.use_vertex_colors = true;
     for (size_t t = 0; t < tile.material.size(); ++t) {
         const uint32_t packed = tile.material[t];

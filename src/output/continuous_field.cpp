@@ -8,8 +8,7 @@
 
 namespace mebake::output {
 
-ContinuousField::ContinuousField(const solve::ChartField& field, double max_delta)
-    : field_(field) {
+ContinuousField::ContinuousField(const solve::ChartField& field, double max_delta) : field_(field) {
     double smallest = 1;
     for (const solve::QuadNode& n : field.nodes())
         if (n.leaf())

@@ -39,14 +39,10 @@ void WriteJson(const std::string& path, const nlohmann::json& j) {
     out->Commit();
 }
 
-}  // namespace
-
-void RunExportJob(const ExportJobOptions& c) {
-    const auto t0 = Clock::now();
-    const std::vector<std::string> outputs = {c.lightmap, c.irradiance, c.mesh, c.vertex_colors,
-                                              c.stats};
+// Throws Error(Usage) when nothing is asked for or two outputs go to stdout.
+void CheckRequested(const ExportJobOptions& c) {
     int to_stdout = 0, given = 0;
-    for (const auto& o : outputs) {
+    for (const auto& o : {c.lightmap, c.irradiance, c.mesh, c.vertex_colors, c.stats}) {
         given += !o.empty();
         to_stdout += o == "-";
     }
@@ -55,10 +51,11 @@ void RunExportJob(const ExportJobOptions& c) {
                    "or --stats");
     if (to_stdout > 1)
         UsageError("only one output can go to stdout ('-')");
+}
 
-    // Fields are read a chart at a time: memory follows the charts being written.
-    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand);
-    const Atlas atlas = PackAtlas(ChartResolutions(view), c.atlas);
+// Throws Error(Usage) when an output exists and force is not set (before anything is
+// written).
+void CheckFreshOutputs(const ExportJobOptions& c, const Atlas& atlas) {
     const uint32_t pages = uint32_t(atlas.pages.size());
     for (uint32_t p = 0; p < pages; ++p) {
         if (!c.lightmap.empty())
@@ -68,45 +65,91 @@ void RunExportJob(const ExportJobOptions& c) {
     }
     for (const auto& o : {c.mesh, c.vertex_colors, c.stats})
         CheckFresh(o, c.force);
+}
+
+nlohmann::json AtlasJson(const Atlas& atlas) {
+    nlohmann::json jp = nlohmann::json::array();
+    for (const auto& p : atlas.pages)
+        jp.push_back({{"width", p.width}, {"height", p.height}});
+    return {{"pages", jp},
+            {"gutter", atlas.gutter},
+            {"texels", atlas.texels()},
+            {"fill", atlas.fill()}};
+}
+
+nlohmann::json JumpJson(const JumpSummary& s) {
+    return {{"mean", s.mean}, {"p95", s.p95}, {"max", s.max}};
+}
+
+// The seam metric across chart borders and node borders (seams.h, node_seams.h).
+void MeasureAllSeams(const BakeView& view, nlohmann::json* j) {
+    const SeamStats s = MeasureSeams(view);
+    (*j)["seams"] = {{"edges", s.seam_edges},
+                     {"open_edges", s.open_edges},
+                     {"fold_edges", s.fold_edges},
+                     {"samples", s.samples},
+                     {"mean_relative_jump", s.mean_relative},
+                     {"p95_relative_jump", s.p95_relative},
+                     {"max_relative_jump", s.max_relative},
+                     {"mean_level", s.mean_level},
+                     {"worst_edge", {s.worst_v0, s.worst_v1}},
+                     {"display_jump", JumpJson(s.display)}};
+    const NodeSeamStats ns = MeasureNodeSeams(view);
+    (*j)["node_seams"] = {{"edges", ns.edges},
+                          {"samples", ns.display.samples},
+                          {"display_jump", JumpJson(ns.display)}};
+    spdlog::info(
+        "seams: {} edges ({} on folds not measured), relative jump mean {:.3g}, p95 {:.3g}, "
+        "max {:.3g}",
+        s.seam_edges, s.fold_edges, s.mean_relative, s.p95_relative, s.max_relative);
+    spdlog::info("display jumps (tone-mapped sRGB, 0..1): chart borders mean {:.4f}, p95 {:.4f}, "
+                 "max {:.4f}; node borders ({} edges) mean {:.4f}, p95 {:.4f}, max {:.4f}",
+                 s.display.mean, s.display.p95, s.display.max, ns.edges, ns.display.mean,
+                 ns.display.p95, ns.display.max);
+}
+
+}  // namespace
+
+void RunExportJob(const ExportJobOptions& c) {
+    const auto t0 = Clock::now();
+    CheckRequested(c);
+    // Fields are read a chart at a time: memory follows the charts being written.
+    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand);
+    const Atlas atlas = PackAtlas(ChartResolutions(view), c.atlas);
+    CheckFreshOutputs(c, atlas);
     spdlog::info("{} charts in {} atlas page{} ({} texels, {:.1f}% filled)", view.chart_count(),
-                 pages, pages == 1 ? "" : "s", FormatCount(double(atlas.texels())),
-                 100 * atlas.fill());
+                 atlas.pages.size(), atlas.pages.size() == 1 ? "" : "s",
+                 FormatCount(double(atlas.texels())), 100 * atlas.fill());
 
     nlohmann::json j;
     j["charts"] = view.chart_count();
     j["unknown"] = view.solution.radiosity ? "radiosity" : "irradiance";
-    nlohmann::json jp = nlohmann::json::array();
-    for (const auto& p : atlas.pages)
-        jp.push_back({{"width", p.width}, {"height", p.height}});
-    j["atlas"] = {{"pages", jp},
-                  {"gutter", atlas.gutter},
-                  {"texels", atlas.texels()},
-                  {"fill", atlas.fill()}};
+    j["atlas"] = AtlasJson(atlas);
     j["tone_map"] = {{"exposure", c.maps.tone.exposure}, {"curve", c.tone_curve}};
     nlohmann::json seconds = nlohmann::json::object();
 
-    if (!c.lightmap.empty()) {
-        auto t = Clock::now();
-        auto files =
-            WriteMapPages(view, atlas, c.lightmap, MapContent::Radiosity, c.maps);
-        seconds["lightmap"] = Since(t);
-        j["lightmap"] = files;
-        spdlog::info("light map: {} ({})", fmt::join(files, ", "), FormatSeconds(Since(t)));
-    }
-    if (!c.irradiance.empty()) {
-        auto t = Clock::now();
-        auto files =
-            WriteMapPages(view, atlas, c.irradiance, MapContent::Irradiance, c.maps);
-        seconds["irradiance"] = Since(t);
-        j["irradiance"] = files;
-        spdlog::info("vector irradiance: {} ({})", fmt::join(files, ", "), FormatSeconds(Since(t)));
+    struct Map {
+        const std::string& path;
+        MapContent content;
+        const char *key, *what;
+    };
+    for (const Map& m :
+         {Map{c.lightmap, MapContent::Radiosity, "lightmap", "light map"},
+          Map{c.irradiance, MapContent::Irradiance, "irradiance", "vector irradiance"}}) {
+        if (m.path.empty())
+            continue;
+        const auto t = Clock::now();
+        const auto files = WriteMapPages(view, atlas, m.path, m.content, c.maps);
+        seconds[m.key] = Since(t);
+        j[m.key] = files;
+        spdlog::info("{}: {} ({})", m.what, fmt::join(files, ", "), FormatSeconds(Since(t)));
     }
     if (!c.mesh.empty()) {
-        auto t = Clock::now();
+        const auto t = Clock::now();
         MeshExportOptions me;
         me.glb_mode = c.glb_mode;
         me.tone = c.maps.tone;
-        auto st = WriteBakedMesh(view, atlas, c.mesh, me);
+        const auto st = WriteBakedMesh(view, atlas, c.mesh, me);
         seconds["mesh"] = Since(t);
         j["mesh"] = {{"path", c.mesh}, {"vertices", st.vertices}, {"triangles", st.triangles}};
         spdlog::info("mesh: {} ({} vertices, {} triangles, {})", c.mesh,
@@ -114,11 +157,11 @@ void RunExportJob(const ExportJobOptions& c) {
                      FormatSeconds(Since(t)));
     }
     if (!c.vertex_colors.empty()) {
-        auto t = Clock::now();
+        const auto t = Clock::now();
         VertexColorOptions vo;
         vo.tone = c.maps.tone;
         vo.float_colors = c.float_colors;
-        auto st = WriteVertexColors(view, c.vertex_colors, vo);
+        const auto st = WriteVertexColors(view, c.vertex_colors, vo);
         seconds["vertex_colors"] = Since(t);
         j["vertex_colors"] = {
             {"path", c.vertex_colors},     {"vertices", st.vertices},
@@ -129,36 +172,9 @@ void RunExportJob(const ExportJobOptions& c) {
                      FormatSeconds(Since(t)));
     }
     if (!c.stats.empty()) {
-        auto t = Clock::now();
-        const SeamStats s = MeasureSeams(view);
+        const auto t = Clock::now();
+        MeasureAllSeams(view, &j);
         seconds["seams"] = Since(t);
-        j["seams"] = {{"edges", s.seam_edges},
-                      {"open_edges", s.open_edges},
-                      {"fold_edges", s.fold_edges},
-                      {"samples", s.samples},
-                      {"mean_relative_jump", s.mean_relative},
-                      {"p95_relative_jump", s.p95_relative},
-                      {"max_relative_jump", s.max_relative},
-                      {"mean_level", s.mean_level},
-                      {"worst_edge", {s.worst_v0, s.worst_v1}},
-                      {"display_jump", {{"mean", s.display.mean},
-                                        {"p95", s.display.p95},
-                                        {"max", s.display.max}}}};
-        const NodeSeamStats ns = MeasureNodeSeams(view);
-        j["node_seams"] = {{"edges", ns.edges},
-                           {"samples", ns.display.samples},
-                           {"display_jump", {{"mean", ns.display.mean},
-                                             {"p95", ns.display.p95},
-                                             {"max", ns.display.max}}}};
-        spdlog::info(
-            "seams: {} edges ({} on folds not measured), relative jump mean {:.3g}, p95 {:.3g}, "
-            "max {:.3g}",
-            s.seam_edges, s.fold_edges, s.mean_relative, s.p95_relative, s.max_relative);
-        spdlog::info("display jumps (tone-mapped sRGB, 0..1): chart borders mean {:.4f}, p95 "
-                     "{:.4f}, max {:.4f}; node borders ({} edges) mean {:.4f}, p95 {:.4f}, max "
-                     "{:.4f}",
-                     s.display.mean, s.display.p95, s.display.max, ns.edges, ns.display.mean,
-                     ns.display.p95, ns.display.max);
     }
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;
@@ -186,8 +202,8 @@ void RunRenderJob(const RenderJobOptions& c) {
     const RenderedImage img = Render(view, ro);
     WriteRenderedImage(img, c.output, c.tone, c.exr_type);
     const Vec3d& e = ro.camera.eye;
-    spdlog::info("rendered {}x{} from ({:.4g}, {:.4g}, {:.4g}): {} rays, {:.1f}% hit, {}", c.width, c.height,
-                 e.x, e.y, e.z, FormatCount(double(img.rays)),
+    spdlog::info("rendered {}x{} from ({:.4g}, {:.4g}, {:.4g}): {} rays, {:.1f}% hit, {}", c.width,
+                 c.height, e.x, e.y, e.z, FormatCount(double(img.rays)),
                  img.rays ? 100.0 * double(img.hits) / double(img.rays) : 0.0,
                  FormatSeconds(Since(t0)));
 }

@@ -207,7 +207,8 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
 // patch), the probes are evaluated first, or found in the cache; where all of them agree
 // on a light vertex's visibility, the other points take it without a ray.
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
-                            size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
+                            size_t probes, ProbeCache* cache,
+                            std::span<const ProbeKey> keys) const {
     const bool coherent = probes > 0 && probes < points.size();
     // Probes found in the cache, and records for the others (filled light by light).
     std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);

@@ -8,7 +8,6 @@
 // and do not count. Rays go only where a shadow edge crosses the light, and all points of a
 // level share one Embree batch. docs/method.md, "Direct light", says why.
 #include "solve/direct.h"
-
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 
@@ -43,8 +42,14 @@ public:
 
     PenumbraPass(const DirectLight& dl, const Light& l, std::span<const ReceiverPoint> points,
                  std::span<const size_t> penumbra)
-        : dl_(dl), l_(l), points_(points), penumbra_(penumbra), g_(l.grid),
-          nt_(l.vertices.size() - 2), per_t_(size_t(g_ + 1) * size_t(g_ + 1)), nv_(nt_ * per_t_),
+        : dl_(dl),
+          l_(l),
+          points_(points),
+          penumbra_(penumbra),
+          g_(l.grid),
+          nt_(l.vertices.size() - 2),
+          per_t_(size_t(g_ + 1) * size_t(g_ + 1)),
+          nv_(nt_ * per_t_),
           state_(penumbra.size() * nv_, kUnknown) {
         PrepareHorizons();
     }
@@ -207,9 +212,9 @@ private:
     std::vector<Cell> RefineCells(std::vector<Vec3d>* e) {
         std::vector<Cell> cur = InitialCells(), next, finest;
         while (!cur.empty()) {
-            cur.erase(std::remove_if(cur.begin(), cur.end(),
-                                     [&](const Cell& c) { return Below(c); }),
-                      cur.end());
+            cur.erase(
+                std::remove_if(cur.begin(), cur.end(), [&](const Cell& c) { return Below(c); }),
+                cur.end());
             TraceCorners(cur);
             next.clear();
             for (const Cell& c : cur) {
@@ -278,7 +283,7 @@ private:
         for (size_t k = 0; k < spans.size(); ++k) {
             const Span& sp = spans[k];
             aligned[k / nt_] |= sp.count >= 4 && (sp.hi[0] == sp.lo[0] || sp.hi[1] == sp.lo[1] ||
-                                                 sp.hi[2] == sp.lo[2]);
+                                                  sp.hi[2] == sp.lo[2]);
         }
         return aligned;
     }
@@ -324,7 +329,8 @@ private:
         double b = std::fmod(0.5 + 0.5698402909980532 * double(id + 1), 1.0);
         if (a + b > 1)
             a = 1 - a, b = 1 - b;
-        const Vec3d& p0 = l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0) : VertexIndex(c.t, a0, b0)];
+        const Vec3d& p0 =
+            l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0) : VertexIndex(c.t, a0, b0)];
         const Vec3d& p1 =
             l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0 + 1) : VertexIndex(c.t, a0 + 1, b0)];
         const Vec3d& p2 = l_.grid_pos[VertexIndex(c.t, a0, b0 + 1)];

@@ -4,13 +4,12 @@
 // FitDirectLights refines where a node's polynomial misses its control points (largest
 // integrated error first, within the chart's node budget), GatherSky adds the sky at a
 // fixed level and pushes it down.
-#include "solve/solver.h"
-
 #include "core/check.h"
 #include "core/log.h"
 #include "solve/direct.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
+#include "solve/solver.h"
 
 #include <algorithm>
 #include <bit>
@@ -43,8 +42,13 @@ class Solver::DirectSampler {
 public:
     DirectSampler(const Solver& solver, const SolveChart& sc, int order, int max_level,
                   DirectLight& direct)
-        : solver_(solver), sc_(sc), ng_(order + 1), gc_(order + 2),
-          finest_(sc.geometry.finest_level()), max_level_(max_level), direct_(direct) {}
+        : solver_(solver),
+          sc_(sc),
+          ng_(order + 1),
+          gc_(order + 2),
+          finest_(sc.geometry.finest_level()),
+          max_level_(max_level),
+          direct_(direct) {}
 
     void Evaluate(const QuadNode& node, bool control) {
         const int gl = std::min(finest_, int(node.level) + 2);
@@ -53,8 +57,7 @@ public:
         SamplePoints(node, gl, n_gauss, probes);
         e9_all_.assign(all_pts_.size() * 9, 0.f);
         if (direct_.has_lights())
-            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_,
-                             keys_);
+            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_, keys_);
         ToGaussAndControl(n_gauss, n_ctrl, control);
     }
 
@@ -102,8 +105,8 @@ private:
         for (size_t k = 0; k < slot_.size(); ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
             auto smp = SampleBilinear(sc_.geometry, gl, u, v);
-            all_pts_[k] = ReceiverPoint{smp.position, smp.normal,
-                                        VisPoint(sc_, gl, u, v, smp), HorizonNormal(sc_, u, v)};
+            all_pts_[k] = ReceiverPoint{smp.position, smp.normal, VisPoint(sc_, gl, u, v, smp),
+                                        HorizonNormal(sc_, u, v)};
             all_albedo_[k] = solver_.Albedo(smp.material, smp.color);
         }
         keys_.resize(probes);
@@ -171,8 +174,11 @@ void Solver::RefineDirect(uint32_t chart) {
     // Lower orders need finer nodes for the same smooth field (E turns with the surface):
     // a constant over a node covering 20 degrees of a sphere is off by 2%, which an albedo
     // of 0.9 amplifies ninefold. Nodes above min_level are split without a test.
-    const int min_level =
-        std::max(0, opt_.min_level + (order == 0 ? 3 : order == 1 ? 2 : 0) + size_levels);
+    const int min_level = std::max(0, opt_.min_level +
+                                          (order == 0   ? 3
+                                           : order == 1 ? 2
+                                                        : 0) +
+                                          size_levels);
 
     DirectSampler sampler(*this, sc, order, max_level, direct);
     FitDirectLights(chart, sampler, min_level, max_level);
@@ -188,8 +194,7 @@ void Solver::RefineDirect(uint32_t chart) {
 // refined and every node still holds its own fit: the budget degrades the whole chart
 // evenly instead of leaving the last quadrants of a depth-first walk at the root's
 // resolution.
-void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level,
-                             int max_level) {
+void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level) {
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;

@@ -165,8 +165,9 @@ void ReadGeometry(const std::string& dir, GeometryCache* cache, std::vector<Solv
     for (size_t first = 0; first < charts->size(); first += batch) {
         tiles.assign(std::min(batch, charts->size() - first), {});
         ParallelFor(0, int64_t(tiles.size()), [&](int64_t k) {
-            tiles[size_t(k)] = stream::ReadTile(stream::TilePath(dir, uint32_t(first) + uint32_t(k)),
-                                                stream::TileParts::GeometryImage);
+            tiles[size_t(k)] =
+                stream::ReadTile(stream::TilePath(dir, uint32_t(first) + uint32_t(k)),
+                                 stream::TileParts::GeometryImage);
         });
         for (size_t k = 0; k < tiles.size(); ++k) {
             stream::ChartTile& tile = tiles[k];

@@ -240,9 +240,14 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
 class Solver::Gatherer {
 public:
     Gatherer(Solver& solver, uint32_t receiver)
-        : s_(solver), sc_(solver.charts_[receiver]), pin_(sc_.geometry.Pin()),
-          field_(solver.fields_[receiver]), order_(field_.order()), ng_(order_ + 1),
-          finest_(sc_.geometry.finest_level()), eps_(solver.RayOffset(receiver)),
+        : s_(solver),
+          sc_(solver.charts_[receiver]),
+          pin_(sc_.geometry.Pin()),
+          field_(solver.fields_[receiver]),
+          order_(field_.order()),
+          ng_(order_ + 1),
+          finest_(sc_.geometry.finest_level()),
+          eps_(solver.RayOffset(receiver)),
           coeffs_(size_t(field_.stride())) {
         // A constant (M0) receiver node holds one E for its whole area, while the E of a
         // source turns and falls off across it by ~ its size / distance (higher orders hold
@@ -276,8 +281,8 @@ public:
             const bool emit_can = lk.level < top;
             const double bound =
                 dist > 0 ? double(et.db_max) * et.area / (std::numbers::pi * dist * dist) : 1e300;
-            const bool small = dist > 0 && size_r / dist <= receiver_tau_ &&
-                               size_e / dist <= s_.opt_.emitter_tau;
+            const bool small =
+                dist > 0 && size_r / dist <= receiver_tau_ && size_e / dist <= s_.opt_.emitter_tau;
             // A receiver node already smaller than the finest emitter samples gains nothing
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
@@ -369,8 +374,8 @@ private:
                     if (t.area <= 0 || t.db_max <= 0)
                         continue;
                     Vec3d contrib;
-                    if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area},
-                                       texel_side, &contrib))
+                    if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area}, texel_side,
+                                       &contrib))
                         continue;
                     pairs_.push_back({p, k, Vec3f(contrib)});
                     batch_.AddSegment(org, t.vis + t.nrm * eps_);
@@ -495,7 +500,8 @@ void Solver::Run(const Progress& progress) {
     if (next_batch_ < 0) {
         reference_ = ReferenceIrradiance();
         ParallelFor(0, nc, [&](int64_t c) {
-            if (!stop_ || !stop_->load()) RefineDirect(uint32_t(c));
+            if (!stop_ || !stop_->load())
+                RefineDirect(uint32_t(c));
         });
         stats_.seconds_direct = Since(t0);
         if (stop_ && stop_->load()) {
@@ -535,8 +541,7 @@ void Solver::Run(const Progress& progress) {
             stats_.stop_reason = "bounce limit";
             break;
         }
-        if (opt_.settings.time_limit > 0 &&
-            seconds_before + Since(t0) > opt_.settings.time_limit) {
+        if (opt_.settings.time_limit > 0 && seconds_before + Since(t0) > opt_.settings.time_limit) {
             stats_.stop_reason = "time limit";
             break;
         }

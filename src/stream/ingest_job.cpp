@@ -24,8 +24,6 @@ bool IsRegularFile(const std::string& path) {
     return path != "-" && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-
-
 // Throws Error(Usage) unless `path` (a file, or all of stdin) has the recorded identity.
 void CheckSameInput(const std::string& path, const stream::InputRecord& rec,
                     const std::string& dir) {

@@ -17,7 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(MemoryBudget, SolveReportsSharesAndCapsEmbree) {
-    const fs::path dir = fs::temp_directory_path() / ("mebake-budget-" + std::to_string(::getpid()));
+    const fs::path dir =
+        fs::temp_directory_path() / ("mebake-budget-" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string bake = (dir / "s.mebake").string();
