@@ -9,6 +9,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace mebake {
 
@@ -30,6 +31,17 @@ PagedFile::PagedFile(std::string path, bool create, size_t cache_bytes, size_t p
     struct stat st {};
     ::fstat(fd_, &st);
     size_ = disk_size_ = uint64_t(st.st_size);
+    Init(cache_bytes);
+}
+
+PagedFile::PagedFile(const Temporary& temp, size_t cache_bytes, size_t page_bytes)
+    : path_(TemporaryDirectory(temp.dir) + "/(" + temp.what + ")"), temp_(temp), page_bytes_(page_bytes) {
+    Init(cache_bytes);  // the file is made by the first write-back: small data never touches disk
+}
+
+void PagedFile::Init(size_t cache_bytes) {
+    CHECK(page_bytes_ > 0 && (page_bytes_ & (page_bytes_ - 1)) == 0);
+    while ((size_t(1) << page_shift_) < page_bytes_) ++page_shift_;
     size_t count = std::max<size_t>(4, cache_bytes / page_bytes_);
     memory_.resize(count * page_bytes_);
     pages_.resize(count);
@@ -80,6 +92,7 @@ void PagedFile::MapErase(uint64_t page_number) {
 void PagedFile::WriteBack(size_t slot) {
     Page& p = pages_[slot];
     if (!p.dirty) return;
+    if (fd_ < 0) fd_ = OpenTemporaryFile(temp_->dir, temp_->what);
     uint64_t off = p.number * page_bytes_;
     size_t n = size_t(std::min<uint64_t>(page_bytes_, size_ > off ? size_ - off : 0));
     const uint8_t* src = memory_.data() + slot * page_bytes_;
@@ -97,13 +110,18 @@ void PagedFile::WriteBack(size_t slot) {
 }
 
 uint8_t* PagedFile::Fetch(uint64_t page_number, bool for_write) {
-    int32_t s = Lookup(page_number);
-    if (s >= 0) {
-        ++hits_;
-        pages_[size_t(s)].referenced = true;
-        if (for_write) pages_[size_t(s)].dirty = true;
-        return memory_.data() + size_t(s) * page_bytes_;
-    }
+    TlbEntry& t = tlb_[page_number % kTlb];
+    int32_t s = t.number == page_number ? t.slot : Lookup(page_number);
+    if (s < 0) return Miss(page_number, for_write);
+    ++hits_;
+    t = {page_number, s};
+    Page& p = pages_[size_t(s)];
+    p.referenced = true;
+    if (for_write) p.dirty = true;
+    return memory_.data() + (size_t(s) << page_shift_);
+}
+
+uint8_t* PagedFile::Miss(uint64_t page_number, bool for_write) {
     ++misses_;
     // Clock eviction: skip recently referenced pages once.
     size_t slot;
@@ -117,9 +135,11 @@ uint8_t* PagedFile::Fetch(uint64_t page_number, bool for_write) {
     if (p.number != ~uint64_t(0)) {
         WriteBack(slot);
         MapErase(p.number);
+        TlbEntry& old = tlb_[p.number % kTlb];
+        if (old.number == p.number) old = TlbEntry{};
     }
-    uint8_t* dst = memory_.data() + slot * page_bytes_;
-    uint64_t off = page_number * page_bytes_;
+    uint8_t* dst = memory_.data() + (slot << page_shift_);
+    uint64_t off = page_number << page_shift_;
     size_t have = size_t(std::min<uint64_t>(page_bytes_, disk_size_ > off ? disk_size_ - off : 0));
     size_t done = 0;
     while (done < have) {
@@ -133,6 +153,7 @@ uint8_t* PagedFile::Fetch(uint64_t page_number, bool for_write) {
     p.dirty = for_write;
     p.referenced = true;
     MapInsert(page_number, int32_t(slot));
+    tlb_[page_number % kTlb] = {page_number, int32_t(slot)};
     return dst;
 }
 
@@ -140,8 +161,8 @@ void PagedFile::Read(uint64_t offset, void* dst, size_t n) {
     CHECK_LE(offset + n, size_);
     auto out = static_cast<uint8_t*>(dst);
     while (n > 0) {
-        uint64_t pn = offset / page_bytes_;
-        size_t in_page = size_t(offset % page_bytes_);
+        uint64_t pn = offset >> page_shift_;
+        size_t in_page = size_t(offset & (page_bytes_ - 1));
         size_t k = std::min(n, page_bytes_ - in_page);
         std::memcpy(out, Fetch(pn, false) + in_page, k);
         out += k;
@@ -154,8 +175,8 @@ void PagedFile::Write(uint64_t offset, const void* src, size_t n) {
     auto in = static_cast<const uint8_t*>(src);
     if (offset + n > size_) size_ = offset + n;
     while (n > 0) {
-        uint64_t pn = offset / page_bytes_;
-        size_t in_page = size_t(offset % page_bytes_);
+        uint64_t pn = offset >> page_shift_;
+        size_t in_page = size_t(offset & (page_bytes_ - 1));
         size_t k = std::min(n, page_bytes_ - in_page);
         std::memcpy(Fetch(pn, true) + in_page, in, k);
         in += k;

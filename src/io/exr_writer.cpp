@@ -4,6 +4,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/temp_file.h"
 #include "io/byte_stream.h"
 
 #include <ImfChannelList.h>
@@ -74,11 +75,6 @@ Imf::Compression ToImf(ExrCompression c) {
     return Imf::ZIP_COMPRESSION;
 }
 
-std::string TempDirectory() {
-    const char* t = std::getenv("TMPDIR");
-    return t && *t ? t : "/tmp";
-}
-
 }  // namespace
 
 struct ExrWriter::Impl {
@@ -120,22 +116,18 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
     m.channels = std::move(channels);
     m.options = options;
     m.to_stdout = m.path == "-";
-    std::string tmpl;
     if (m.to_stdout) {
-        tmpl = TempDirectory() + "/mebake-exr-XXXXXX";
+        // OpenEXR needs a seekable file: an unlinked temporary, copied to stdout at the end.
+        m.fd = OpenTemporaryFile(TemporaryDirectory(), "EXR image");
     } else {
         std::filesystem::path p(m.path);
         std::string dir = p.has_parent_path() ? p.parent_path().string() : ".";
-        tmpl = dir + "/." + p.filename().string() + ".tmp-XXXXXX";
-    }
-    std::vector<char> name(tmpl.begin(), tmpl.end());
-    name.push_back('\0');
-    m.fd = ::mkostemp(name.data(), O_CLOEXEC);
-    if (m.fd < 0)
-        IoError({m.path}, "cannot create output: {}", ErrnoString(errno));
-    if (m.to_stdout) {
-        ::unlink(name.data());  // nothing is left behind whatever happens
-    } else {
+        std::string tmpl = dir + "/." + p.filename().string() + ".tmp-XXXXXX";
+        std::vector<char> name(tmpl.begin(), tmpl.end());
+        name.push_back('\0');
+        m.fd = ::mkostemp(name.data(), O_CLOEXEC);
+        if (m.fd < 0)
+            IoError({m.path}, "cannot create output: {}", ErrnoString(errno));
         m.temp = name.data();
         ::fchmod(m.fd, 0644);
     }

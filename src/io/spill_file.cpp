@@ -1,13 +1,12 @@
 #include "io/spill_file.h"
 
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdlib>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace mebake::io {
 
@@ -15,20 +14,8 @@ namespace {
 constexpr size_t kBufferSize = size_t(1) << 20;
 }
 
-SpillFile::SpillFile(const std::string& dir, std::string purpose) : purpose_(std::move(purpose)) {
-    dir_ = dir;
-    if (dir_.empty()) {
-        const char* env = std::getenv("TMPDIR");
-        dir_ = env != nullptr && *env != '\0' ? env : "/tmp";
-    }
-    std::string tmpl = dir_ + "/mebake-spill-XXXXXX";
-    std::vector<char> name(tmpl.begin(), tmpl.end());
-    name.push_back('\0');
-    fd_ = ::mkostemp(name.data(), O_CLOEXEC);
-    if (fd_ < 0)
-        IoError({dir_}, "cannot create a temporary file for the {}: {}", purpose_,
-                ErrnoString(errno));
-    ::unlink(name.data());
+SpillFile::SpillFile(const std::string& dir, std::string purpose)
+    : dir_(TemporaryDirectory(dir)), purpose_(std::move(purpose)), fd_(OpenTemporaryFile(dir, purpose_)) {
     buffer_.reserve(kBufferSize);
 }
 

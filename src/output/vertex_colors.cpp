@@ -8,13 +8,9 @@
 #include "stream/trimesh.h"
 
 #include <array>
-#include <cerrno>
 #include <cmath>
-#include <cstdlib>
-#include <fcntl.h>
 #include <memory>
 #include <numbers>
-#include <unistd.h>
 
 namespace mebake::output {
 
@@ -33,24 +29,11 @@ static_assert(sizeof(Accum) == 16);
 
 using Face = std::array<uint64_t, 3>;
 
-// A DiskArray on an anonymous file: created in the temp directory and unlinked at once.
+// A DiskArray on an unlinked temporary file.
 template <typename T>
 std::unique_ptr<DiskArray<T>> TempArray(const std::string& temp_dir, size_t cache_bytes) {
-    std::string dir = temp_dir;
-    if (dir.empty()) {
-        const char* t = std::getenv("TMPDIR");
-        dir = t && *t ? t : "/tmp";
-    }
-    std::string tmpl = dir + "/mebake-vcol-XXXXXX";
-    std::vector<char> name(tmpl.begin(), tmpl.end());
-    name.push_back('\0');
-    int fd = ::mkostemp(name.data(), O_CLOEXEC);
-    if (fd < 0)
-        IoError({dir}, "cannot create a temporary file: {}", ErrnoString(errno));
-    ::close(fd);
-    auto a = std::make_unique<DiskArray<T>>(name.data(), true, cache_bytes);
-    ::unlink(name.data());
-    return a;
+    return std::make_unique<DiskArray<T>>(PagedFile::Temporary{temp_dir, "vertex colours"},
+                                          cache_bytes);
 }
 
 struct TileColors {

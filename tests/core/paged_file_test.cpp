@@ -60,3 +60,33 @@ TEST(PagedFile, UnalignedRecordsSpanPages) {
 
 }  // namespace
 }  // namespace mebake
+
+namespace mebake {
+namespace {
+
+// A temporary array leaves nothing in its directory, and its small TLB of recent pages
+// never serves a page that was evicted: random access through the minimum cache.
+TEST(PagedFile, TemporaryArrayRandomAccessThroughTheMinimumCache) {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("paged-temp-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    {
+        DiskArray<uint64_t> a(PagedFile::Temporary{dir.string(), "test"}, 0);
+        const uint64_t n = 300000;  // 2.4 MB: 37 pages through a cache of 4
+        for (uint64_t i = 0; i < n; ++i) a.Push(i * 3);
+        EXPECT_TRUE(std::filesystem::is_empty(dir));
+        std::mt19937_64 rng(11);
+        for (int k = 0; k < 100000; ++k) {
+            const uint64_t i = rng() % n;
+            ASSERT_EQ(a.Get(i), i * 3) << "k " << k;
+            if (k % 3 == 0) {
+                a.Set(i, i * 3);  // dirty pages written back on eviction, same value
+            }
+        }
+        EXPECT_GT(a.file().misses(), 1000u);
+    }
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace mebake

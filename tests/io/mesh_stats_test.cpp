@@ -286,11 +286,12 @@ TEST_F(MeshStatsSpill, DeferredFaceNamingMissingVertexIsAnInputError) {
 }
 
 TEST(MeshStats, UnwritableTempDirIsAnIoError) {
-    TestMesh m = Grid(100, 50);  // 5000 vertices: full blocks spill
-    MeshStatsSink sink("/nonexistent/mebake-stats-dir");
+    // 100K vertices (1.2 MB) through the smallest cache (4 pages of 64 KiB): pages spill.
+    TestMesh m = Grid(400, 250);
+    MeshStatsSink sink("/nonexistent/mebake-stats-dir", 0);
     sink.Begin(m.Header());
     try {
-        m.SendVertices(sink, 5000);
+        m.SendVertices(sink, 100000);
         FAIL() << "expected an error";
     } catch (const Error& e) {
         EXPECT_EQ(e.kind(), ErrorKind::Io);
