@@ -43,18 +43,24 @@ int RunCompareImages(const CompareCommand& c) {
     if (!c.mask.empty())
         mask = output::ReadComparedImage(c.mask);
     const output::ComparedImage* m = mask ? &*mask : nullptr;
+    if (c.borders && ref.chart.empty())
+        UsageError("--borders: {} has no chart channel (a `mebake reference --image` EXR has)",
+                   c.reference);
     const output::ImageDifference d = output::CompareImages(image, ref, tone, m);
     if (!d.masked)
         spdlog::warn("compare: no coverage channel (A) in either picture or --mask: every pixel, "
                      "the background too, is compared");
     if (!c.diff.empty()) {
-        const auto bytes = output::DifferencePicture(image, ref, tone, c.diff_range, m);
+        const auto bytes = output::DifferencePicture(image, ref, tone, c.diff_range, m, c.borders);
         io::WritePng(c.diff, image.width, image.height, 3, bytes);
     }
     std::string noise;
     if (d.noise_rms)
         noise = fmt::format(" (reference noise {:.2f}%, without it {:.2f}%)", 100 * *d.noise_rms,
                             100 * *d.corrected_rms);
+    if (d.border_rms)
+        noise += fmt::format("; next to chart borders ({} pixels) {:.2f}%, elsewhere {:.2f}%",
+                             d.border_pixels, 100 * *d.border_rms, 100 * *d.interior_rms);
     spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, p95 {:.2f}%, max {:.1f}%; "
                  "display RMS {:.2f}% ({})",
                  c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise, 100 * d.relative_p95,
@@ -74,6 +80,11 @@ int RunCompareImages(const CompareCommand& c) {
     if (d.noise_rms) {
         j["reference_noise_rms"] = *d.noise_rms;
         j["corrected_rms"] = *d.corrected_rms;
+    }
+    if (d.border_rms) {
+        j["border_pixels"] = d.border_pixels;
+        j["border_rms"] = *d.border_rms;
+        j["interior_rms"] = *d.interior_rms;
     }
     if (!c.diff.empty())
         j["diff"] = c.diff;

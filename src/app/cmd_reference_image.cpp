@@ -82,18 +82,21 @@ void WriteImage(const reference::ReferenceImage& img, const std::string& path,
     if (Extension(path) != ".exr")
         UsageError("--image {}: expected a .exr or .png file name", path);
     const size_t n = size_t(img.width) * size_t(img.height);
-    std::vector<float> px(n * 7);
+    std::vector<float> px(n * 8);
     for (size_t p = 0; p < n; ++p) {
-        float* o = &px[p * 7];
+        float* o = &px[p * 8];
         o[0] = img.rgb[3 * p], o[1] = img.rgb[3 * p + 1], o[2] = img.rgb[3 * p + 2];
         o[3] = img.coverage[p];
         o[4] = img.se[3 * p], o[5] = img.se[3 * p + 1], o[6] = img.se[3 * p + 2];
+        o[7] = float(img.chart[p]);  // exact below 2^24 charts
     }
     io::ExrOptions eo;
     eo.type = io::ExrPixelType::Float;
     eo.comments = "mebake reference --image: path-traced radiance (W/m^2/sr) in R G B, "
-                  "coverage in A, standard error of R G B in se.R se.G se.B";
-    io::WriteExr(path, img.width, img.height, {"R", "G", "B", "A", "se.R", "se.G", "se.B"}, px, eo);
+                  "coverage in A, standard error of R G B in se.R se.G se.B, chart of the first "
+                  "ray's hit in chart (-1: none)";
+    io::WriteExr(path, img.width, img.height, {"R", "G", "B", "A", "se.R", "se.G", "se.B", "chart"},
+                 px, eo);
 }
 
 // The noisiest covered pixels (relative standard error, mean over colours), worst first.

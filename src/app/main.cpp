@@ -174,6 +174,7 @@ int main(int argc, char** argv) {
     cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`, or the reference picture")->required();
     cmp_cmd->add_option("--diff", cmp.diff, "Pictures: write the false-colour difference here (.png; red: brighter than the reference, blue: darker)");
     cmp_cmd->add_option("--diff-range", cmp.diff_range, "Pictures: display difference (sRGB 0..1) shown at full colour")->capture_default_str();
+    cmp_cmd->add_flag("--borders", cmp.borders, "Pictures: draw the chart borders of the reference's chart channel on --diff");
     cmp_cmd->add_option("--mask", cmp.mask, "Pictures: an EXR whose coverage (A) also limits the pixels compared");
     cmp_cmd->add_option("--exposure", cmp.exposure, "Pictures: exposure (EV) of the tone map for display values")->capture_default_str();
     cmp_cmd->add_option("--tonemap", cmp.tonemap, "Pictures: tone curve for display values")->capture_default_str()

@@ -30,6 +30,23 @@ bool Counted(const ComparedImage& im, size_t p) {
     return im.coverage.empty() || im.coverage[p] >= 1.f;
 }
 
+// Whether pixel p sees a chart and a pixel of its 3 x 3 block another one.
+bool NearChartBorder(const ComparedImage& im, size_t p) {
+    if (im.chart.empty() || im.chart[p] < 0)
+        return false;
+    const int x = int(p % size_t(im.width)), y = int(p / size_t(im.width));
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int u = x + dx, v = y + dy;
+            if (u < 0 || v < 0 || u >= im.width || v >= im.height)
+                continue;
+            const int32_t c = im.chart[size_t(v) * size_t(im.width) + size_t(u)];
+            if (c >= 0 && c != im.chart[p])
+                return true;
+        }
+    return false;
+}
+
 void CheckSameSize(const ComparedImage& a, const ComparedImage& b) {
     if (a.width != b.width || a.height != b.height)
         InputError({b.path}, "{}x{} pixels, but {} has {}x{}", b.width, b.height, a.path, a.width,
@@ -65,7 +82,7 @@ ComparedImage ReadComparedImage(const std::string& path) {
     const int r = exr.Channel("R"), g = exr.Channel("G"), b = exr.Channel("B");
     if (r < 0 || g < 0 || b < 0)
         InputError({path}, "no R, G and B channels");
-    const int a = exr.Channel("A");
+    const int a = exr.Channel("A"), chart = exr.Channel("chart");
     const int se[3] = {exr.Channel("se.R"), exr.Channel("se.G"), exr.Channel("se.B")};
     const bool has_se = se[0] >= 0 && se[1] >= 0 && se[2] >= 0;
     const size_t n = size_t(exr.width) * size_t(exr.height);
@@ -74,6 +91,8 @@ ComparedImage ReadComparedImage(const std::string& path) {
         im.coverage.resize(n);
     if (has_se)
         im.se.resize(n * 3);
+    if (chart >= 0)
+        im.chart.resize(n);
     for (int y = 0; y < exr.height; ++y)
         for (int x = 0; x < exr.width; ++x) {
             const size_t p = size_t(y) * size_t(exr.width) + size_t(x);
@@ -88,6 +107,8 @@ ComparedImage ReadComparedImage(const std::string& path) {
             }
             if (a >= 0)
                 im.coverage[p] = exr.At(x, y, a);
+            if (chart >= 0)
+                im.chart[p] = int32_t(exr.At(x, y, chart));
         }
     return im;
 }
@@ -108,6 +129,7 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
     };
     std::vector<double> err;  // per counted pixel, in compared units
     double sum_ref = 0, sum_err2 = 0, sum_disp2 = 0, sum_se2 = 0;
+    double border_err2 = 0, interior_err2 = 0;
     const bool has_se = !d.display && (!ref.se.empty() || !image.se.empty());
     for (size_t p = 0; p < n; ++p) {
         if (!Counted(image, p) || !Counted(ref, p) || (mask && !Counted(*mask, p)))
@@ -125,6 +147,12 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
         }
         err.push_back(std::sqrt(e2));
         sum_err2 += e2;
+        if (NearChartBorder(ref, p)) {
+            border_err2 += e2;
+            ++d.border_pixels;
+        } else {
+            interior_err2 += e2;
+        }
         sum_disp2 += disp2;
     }
     d.pixels = err.size();
@@ -140,6 +168,11 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
     d.relative_max = err.back() / d.mean_reference;
     d.relative_p95 =
         err[std::min(err.size() - 1, size_t(std::ceil(0.95 * np)) - 1)] / d.mean_reference;
+    if (!ref.chart.empty() && d.border_pixels > 0 && d.border_pixels < d.pixels) {
+        d.border_rms = std::sqrt(border_err2 / double(d.border_pixels)) / d.mean_reference;
+        d.interior_rms =
+            std::sqrt(interior_err2 / double(d.pixels - d.border_pixels)) / d.mean_reference;
+    }
     if (has_se) {
         d.noise_rms = std::sqrt(sum_se2 / np) / d.mean_reference;
         d.corrected_rms =
@@ -149,8 +182,8 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
 }
 
 std::vector<uint8_t> DifferencePicture(const ComparedImage& image, const ComparedImage& ref,
-                                       const ToneMap& tone, double range,
-                                       const ComparedImage* mask) {
+                                       const ToneMap& tone, double range, const ComparedImage* mask,
+                                       bool borders) {
     CheckSameSize(image, ref);
     if (mask)
         CheckSameSize(image, *mask);
@@ -169,6 +202,19 @@ std::vector<uint8_t> DifferencePicture(const ComparedImage& image, const Compare
             const auto grey = uint8_t(std::lround(std::clamp(b, 0.0, 1.0) * 80));
             o[0] = o[1] = o[2] = grey;
             continue;
+        }
+        if (borders && !ref.chart.empty() && ref.chart[p] >= 0) {
+            // One-pixel lines: where the chart differs from the right or lower neighbour.
+            const size_t x = p % size_t(ref.width), y = p / size_t(ref.width);
+            const bool right = x + 1 < size_t(ref.width) && ref.chart[p + 1] >= 0 &&
+                               ref.chart[p + 1] != ref.chart[p];
+            const bool below = y + 1 < size_t(ref.height) &&
+                               ref.chart[p + size_t(ref.width)] >= 0 &&
+                               ref.chart[p + size_t(ref.width)] != ref.chart[p];
+            if (right || below) {
+                o[0] = o[1] = o[2] = 0;
+                continue;
+            }
         }
         // Diverging map: white at 0, red where the image is brighter, blue where darker.
         const double t = std::clamp((a - b) / range, -1.0, 1.0);

@@ -13,7 +13,9 @@
 //   p95, max       of err / mean of the reference,
 //   display RMS    of the tone-mapped sRGB difference (0..1), what a viewer sees,
 //   noise          sqrt(mean se^2) / mean, the reference's own noise (when it has se), and
-//                  the corrected RMS sqrt(max(0, RMS^2 - noise^2)), the error left to the bake.
+//                  the corrected RMS sqrt(max(0, RMS^2 - noise^2)), the error left to the bake;
+//   border RMS     the relative RMS next to chart borders and away from them, when the
+//                  reference has a chart channel (the reference picture's EXR does).
 #pragma once
 
 #include "output/tonemap.h"
@@ -32,6 +34,7 @@ struct ComparedImage {
     std::vector<float> rgb;       // 3 per pixel
     std::vector<float> coverage;  // empty: none
     std::vector<float> se;        // 3 per pixel; empty: none
+    std::vector<int32_t> chart;   // chart seen per pixel, -1 none; empty: no chart channel
 };
 
 // Reads a .exr (needs R G B) or .png (RGB or RGBA; alpha ignored). Throws Error(Io) when
@@ -47,6 +50,10 @@ struct ImageDifference {
     double relative_rms = 0, relative_p95 = 0, relative_max = 0;
     double display_rms = 0;  // sRGB 0..1
     std::optional<double> noise_rms, corrected_rms;
+    // With a chart channel: the relative RMS over pixels next to a chart border (a
+    // neighbour of the 3 x 3 block sees another chart) and over the others.
+    uint64_t border_pixels = 0;
+    std::optional<double> border_rms, interior_rms;
 };
 
 // `image` against `reference` (the denominator's picture). mask: optional third picture
@@ -57,9 +64,10 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
 
 // A false-colour picture of the signed display error image - reference per pixel (mean
 // over colours of the sRGB values): blue below, white equal, red above, saturating at
-// +-range; pixels not compared show the reference darkened in grey. 8-bit RGB.
+// +-range; pixels not compared show the reference darkened in grey. With `borders`, the
+// chart borders of the reference's chart channel are drawn in black. 8-bit RGB.
 std::vector<uint8_t> DifferencePicture(const ComparedImage& image, const ComparedImage& reference,
                                        const ToneMap& tone, double range,
-                                       const ComparedImage* mask = nullptr);
+                                       const ComparedImage* mask = nullptr, bool borders = false);
 
 }  // namespace mebake::output

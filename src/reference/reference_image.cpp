@@ -72,6 +72,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
             const solve::Hit& ht = hits[r];
             if (ht.geom_id == solve::kNoHit)
                 continue;
+            first[row + r].triangle = ht.prim_id;
             const Vec3f& d = dir[row + r];
             if (ht.ng_x * d.x + ht.ng_y * d.y + ht.ng_z * d.z >= 0) {
                 end[row + r] = RayEnd::Back;  // the back of a surface is black
@@ -93,7 +94,6 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
             points.push_back(PointAt(mesh, scene, f.triangle, b));
             points.back().stream = r;  // paths seeded by pixel and stratum
         }
-    first = {};
     ReferenceImage img;
     img.width = w;
     img.height = h;
@@ -107,6 +107,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
     img.se.assign(img.rgb.size(), 0.f);
     img.coverage.assign(size_t(w) * size_t(h), 0.f);
     img.samples.assign(size_t(w) * size_t(h), 0);
+    img.chart.assign(size_t(w) * size_t(h), -1);
     constexpr double kPi = std::numbers::pi;
     double se2_sum = 0, mean_sum = 0;
     for (size_t pix = 0; pix < size_t(w) * size_t(h); ++pix) {
@@ -127,6 +128,8 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
                     var[c] += (p.b_se[c] / kPi) * (p.b_se[c] / kPi);
             }
         }
+        if (end[pix * per_pixel] != RayEnd::Miss)
+            img.chart[pix] = int32_t(mesh.chart[first[pix * per_pixel].triangle]);
         const double inv = 1.0 / double(per_pixel);
         for (int c = 0; c < 3; ++c) {
             img.rgb[pix * 3 + size_t(c)] = float(sum[c] * inv);

@@ -38,6 +38,7 @@ struct ReferenceImage {
     std::vector<float> se;          // standard error of rgb, 3 per pixel
     std::vector<float> coverage;    // fraction of the pixel's primary rays that hit a surface
     std::vector<uint32_t> samples;  // paths per pixel (over its front-facing rays)
+    std::vector<int32_t> chart;     // chart hit by the pixel's first ray; -1: a miss
     ReferenceStats stats;
     uint64_t points = 0;  // front-facing primary hits whose B was estimated
     // Noise of the picture: RMS over covered pixels of the standard error of the

@@ -77,6 +77,24 @@ TEST(ImageCompare, CoverageAndNoise) {
     EXPECT_LT(rgb[9], 255);
 }
 
+TEST(ImageCompare, ChartBordersSplitTheRms) {
+    // Charts 0 | 1 side by side: pixels 1 and 2 touch the border, 0 and 3 do not.
+    ComparedImage ref = Flat(4, 1, 1.f);
+    ref.chart = {0, 0, 1, 1};
+    ComparedImage im = Flat(4, 1, 1.f);
+    for (int c = 0; c < 3; ++c)
+        im.rgb[3 + size_t(c)] = 1.2f;  // 20 % off at pixel 1
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_EQ(d.border_pixels, 2u);
+    ASSERT_TRUE(d.border_rms.has_value());
+    EXPECT_NEAR(*d.border_rms, 0.2 / std::sqrt(2.0), 1e-6);
+    EXPECT_EQ(*d.interior_rms, 0);
+    // The overlay: a black line on pixel 1 (its right neighbour is another chart).
+    const auto rgb = DifferencePicture(im, ref, ToneMap{}, 0.1, nullptr, true);
+    EXPECT_EQ(rgb[3] + rgb[4] + rgb[5], 0);
+    EXPECT_EQ(rgb[0], 255);
+}
+
 TEST(ImageCompare, ReadsExrAndPngAndRejectsBadInput) {
     const fs::path dir = fs::temp_directory_path() / ("mebake-imgcmp-" + std::to_string(getpid()));
     fs::create_directories(dir);
