@@ -69,7 +69,8 @@ for c in $CASES; do
   input=$(input_of "$c")
   [ -f "$input" ] || { echo "$c: $input absent, skipped" >&2; continue; }
   out="$WORK/$c"
-  [ -f "$out/scene.mebake/solve/solution.bin" ] || "$MEBAKE" -q bake "$input" -o "$out" --force
+  # A bake resumes where an earlier run stopped.
+  [ -f "$out/scene.mebake/solve/solution.bin" ] || "$MEBAKE" -q bake "$input" -o "$out"
   dir="$out/scene.mebake"
   for view in default away; do
     cam=""

@@ -41,10 +41,10 @@ struct CompareCommand {
     std::string output = "-";  // JSON summary, "-" = stdout
     bool points = false;       // also list every point's baked and reference B
     // Pictures: `compare IMAGE REFERENCE` when both are .png/.exr files (output/image_compare.h).
-    std::string diff;          // false-colour difference PNG
-    double diff_range = 0.1;   // display difference (sRGB 0..1) at full colour
-    std::string mask;          // picture whose coverage channel A also limits the pixels
-    bool borders = false;      // draw the reference's chart borders on the difference
+    std::string diff;         // false-colour difference PNG
+    double diff_range = 0.1;  // display difference (sRGB 0..1) at full colour
+    std::string mask;         // picture whose coverage channel A also limits the pixels
+    bool borders = false;     // draw the reference's chart borders on the difference
     double exposure = 0;
     std::string tonemap = "filmic";
 };
