@@ -33,6 +33,58 @@ Vec3f Background(const solve::Scene& scene, const std::optional<Vec3f>& backgrou
 
 enum class RayEnd : uint8_t { Miss, Back, Front };
 
+// Every primary ray's outcome, in ray order (pixel-major, then strata), each in its own
+// slot: traced row by row in parallel.
+struct PrimaryRays {
+    struct FirstHit {
+        uint32_t triangle = 0;
+        float u = 0, v = 0;
+    };
+    std::vector<RayEnd> end;
+    std::vector<Vec3f> dir;
+    std::vector<FirstHit> first;  // triangle (of any hit) and barycentrics (of front hits)
+};
+
+PrimaryRays TracePrimaryRays(const ReferenceTracer& tracer, const PinholeRays& rays, int k) {
+    const Camera& cam = rays.camera();
+    const int w = cam.width;
+    const size_t per_pixel = size_t(k) * size_t(k);
+    const size_t n_rays = size_t(w) * size_t(cam.height) * per_pixel;
+    PrimaryRays pr;
+    pr.end.assign(n_rays, RayEnd::Miss);
+    pr.dir.resize(n_rays);
+    pr.first.resize(n_rays);
+    ParallelFor(0, cam.height, [&](int64_t py) {
+        const size_t row = size_t(py) * size_t(w) * per_pixel;
+        std::vector<solve::Segment> segs(size_t(w) * per_pixel);
+        std::vector<solve::Hit> hits(segs.size());
+        for (int px = 0, r = 0; px < w; ++px)
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx, ++r) {
+                    const Vec3f d = rays.Direction(px, int(py), sx, sy, k);
+                    pr.dir[row + size_t(r)] = d;
+                    segs[size_t(r)] = solve::Segment{
+                        float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f, d.x, d.y, d.z,
+                        INFINITY};
+                }
+        tracer.Intersect(segs, hits);
+        for (size_t r = 0; r < segs.size(); ++r) {
+            const solve::Hit& ht = hits[r];
+            if (ht.geom_id == solve::kNoHit)
+                continue;
+            pr.first[row + r].triangle = ht.prim_id;
+            const Vec3f& d = pr.dir[row + r];
+            if (ht.ng_x * d.x + ht.ng_y * d.y + ht.ng_z * d.z >= 0) {
+                pr.end[row + r] = RayEnd::Back;  // the back of a surface is black
+                continue;
+            }
+            pr.first[row + r] = {ht.prim_id, ht.u, ht.v};
+            pr.end[row + r] = RayEnd::Front;
+        }
+    });
+    return pr;
+}
+
 }  // namespace
 
 ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scene& scene,
@@ -45,43 +97,9 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
     const int w = opt.camera.width, h = opt.camera.height;
     const size_t per_pixel = size_t(k) * size_t(k);
     const size_t n_rays = size_t(w) * size_t(h) * per_pixel;
-    const Vec3d eye = opt.camera.eye;
-
-    // Primary rays, row by row in parallel; each ray's outcome lands in its own slot.
-    std::vector<RayEnd> end(n_rays, RayEnd::Miss);
-    std::vector<Vec3f> dir(n_rays);
-    struct FirstHit {
-        uint32_t triangle = 0;
-        float u = 0, v = 0;
-    };
-    std::vector<FirstHit> first(n_rays);
-    ParallelFor(0, h, [&](int64_t py) {
-        const size_t row = size_t(py) * size_t(w) * per_pixel;
-        std::vector<solve::Segment> segs(size_t(w) * per_pixel);
-        std::vector<solve::Hit> hits(segs.size());
-        for (int px = 0, r = 0; px < w; ++px)
-            for (int sy = 0; sy < k; ++sy)
-                for (int sx = 0; sx < k; ++sx, ++r) {
-                    const Vec3f d = rays.Direction(px, int(py), sx, sy, k);
-                    dir[row + size_t(r)] = d;
-                    segs[size_t(r)] = solve::Segment{
-                        float(eye.x), float(eye.y), float(eye.z), 0.f, d.x, d.y, d.z, INFINITY};
-                }
-        tracer.Intersect(segs, hits);
-        for (size_t r = 0; r < segs.size(); ++r) {
-            const solve::Hit& ht = hits[r];
-            if (ht.geom_id == solve::kNoHit)
-                continue;
-            first[row + r].triangle = ht.prim_id;
-            const Vec3f& d = dir[row + r];
-            if (ht.ng_x * d.x + ht.ng_y * d.y + ht.ng_z * d.z >= 0) {
-                end[row + r] = RayEnd::Back;  // the back of a surface is black
-                continue;
-            }
-            first[row + r] = {ht.prim_id, ht.u, ht.v};
-            end[row + r] = RayEnd::Front;
-        }
-    });
+    const PrimaryRays pr = TracePrimaryRays(tracer, rays, k);
+    const std::vector<RayEnd>& end = pr.end;
+    const std::vector<Vec3f>& dir = pr.dir;
 
     // The front hits, in ray order, through the point estimator.
     std::vector<ReferencePoint> points;
@@ -89,7 +107,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
     for (size_t r = 0; r < n_rays; ++r)
         if (end[r] == RayEnd::Front) {
             point_of[r] = uint32_t(points.size());
-            const FirstHit& f = first[r];
+            const PrimaryRays::FirstHit& f = pr.first[r];
             const double b[3] = {1.0 - double(f.u) - double(f.v), double(f.u), double(f.v)};
             points.push_back(PointAt(mesh, scene, f.triangle, b));
             points.back().stream = r;  // paths seeded by pixel and stratum
@@ -129,7 +147,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
             }
         }
         if (end[pix * per_pixel] != RayEnd::Miss)
-            img.chart[pix] = int32_t(mesh.chart[first[pix * per_pixel].triangle]);
+            img.chart[pix] = int32_t(mesh.chart[pr.first[pix * per_pixel].triangle]);
         const double inv = 1.0 / double(per_pixel);
         for (int c = 0; c < 3; ++c) {
             img.rgb[pix * 3 + size_t(c)] = float(sum[c] * inv);
