@@ -86,6 +86,10 @@ output::ProbeError Score(const output::BakeView& view, const std::vector<output:
 }  // namespace
 
 int RunReference(const ReferenceCommand& c) {
+    if (!c.images.empty())
+        return RunReferenceImage(c);
+    if (!c.eye.empty() || !c.look_at.empty() || !c.up.empty())
+        UsageError("reference: --eye, --target x,y,z and --up need --image");
     ThreadLimit limit(c.threads);
     const stream::Manifest m = stream::ReadManifest(c.dir);
     if (m.state != "ingested")
@@ -174,6 +178,8 @@ int RunReference(const ReferenceCommand& c) {
 }
 
 int RunCompare(const CompareCommand& c) {
+    if (IsPicturePair(c))
+        return RunCompareImages(c);
     json r;
     {
         std::ifstream f(c.reference);

@@ -129,6 +129,7 @@ int main(int argc, char** argv) {
 
     // reference, compare  (#include "app/reference_commands.h")
     mebake::app::ReferenceCommand ref;
+    std::vector<double> ref_target;
     auto* ref_cmd = app.add_subcommand(
         "reference", "Independent path-traced radiosity B and vector irradiance E, with standard\n"
                      "errors, at random surface points of a bake directory (docs/accuracy.md);\n"
@@ -142,17 +143,42 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(uint64_t(2), uint64_t(1) << 40));
     ref_cmd->add_option("--samples", ref.max_samples, "Most paths per point")->capture_default_str()
         ->check(CLI::Range(uint64_t(2), uint64_t(1) << 40));
-    ref_cmd->add_option("--target", ref.target, "Relative standard error of B to stop at")->capture_default_str()
+    // --target: one number is the standard-error target (as always), three are the camera's
+    // look-at point of --image (as in render); --se-target sets the former beside the latter.
+    ref_cmd->add_option("--target", ref_target, "Relative standard error of B to stop at (default 0.01); with --image, three numbers x,y,z are the point looked at, as in render")
+        ->expected(1, 3)->delimiter(',');
+    ref_cmd->add_option("--se-target", ref.target, "Relative standard error of B to stop at")
         ->check(CLI::Range(1e-6, 1.0));
     ref_cmd->add_option("--time-limit", ref.time_limit, "Stop doubling samples after about this many seconds");
     ref_cmd->add_option("--threads", ref.threads, "Worker threads (0: all cores)")->capture_default_str();
     ref_cmd->add_option("-o,--output", ref.output, "JSON output ('-' = stdout)")->capture_default_str();
+    ref_cmd->add_option("--image", ref.images, "Path-trace the picture of a view instead of points: .exr (radiance, coverage A, standard errors se.*) or .png (tone-mapped as render); repeatable")->take_all();
+    ref_cmd->add_option("--eye", ref.eye, "--image: camera position x,y,z (default: render's view)")->expected(3)->delimiter(',');
+    ref_cmd->add_option("--up", ref.up, "--image: up direction x y z")->expected(3)->delimiter(',');
+    ref_cmd->add_option("--fov", ref.fov, "--image: vertical field of view, degrees")->capture_default_str()
+        ->check(CLI::Range(1.0, 179.0));
+    ref_cmd->add_option("--size", ref.size, "--image: WIDTHxHEIGHT")->capture_default_str();
+    ref_cmd->add_option("--aa", ref.strata, "--image: primary rays per pixel and axis (as render --samples)")->capture_default_str()
+        ->check(CLI::Range(1, 16));
+    ref_cmd->add_option("--background", ref.background, "--image: radiance of missed rays r g b (default: the sky)")->expected(3)->delimiter(',');
+    ref_cmd->add_option("--exposure", ref.exposure, "--image: exposure in stops (EV) for PNG")->capture_default_str();
+    ref_cmd->add_option("--tonemap", ref.tonemap, "--image: tone curve for PNG")->capture_default_str()
+        ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
     mebake::app::CompareCommand cmp;
     auto* cmp_cmd = app.add_subcommand(
         "compare", "Score a solved bake directory against a `mebake reference` JSON: relative RMS\n"
-                   "and max error of B at the reference's points (docs/accuracy.md).");
-    cmp_cmd->add_option("dir", cmp.dir, "Solved bake directory")->required();
-    cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`")->required();
+                   "and max error of B at the reference's points; or two pictures of the same\n"
+                   "view (IMAGE REFERENCE, .png/.exr): RMS, p95, max and a difference picture\n"
+                   "(docs/accuracy.md).");
+    cmp_cmd->add_option("dir", cmp.dir, "Solved bake directory, or a picture (.png/.exr)")->required();
+    cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`, or the reference picture")->required();
+    cmp_cmd->add_option("--diff", cmp.diff, "Pictures: write the false-colour difference here (.png; red: brighter than the reference, blue: darker)");
+    cmp_cmd->add_option("--diff-range", cmp.diff_range, "Pictures: display difference (sRGB 0..1) shown at full colour")->capture_default_str();
+    cmp_cmd->add_flag("--borders", cmp.borders, "Pictures: draw the chart borders of the reference's chart channel on --diff");
+    cmp_cmd->add_option("--mask", cmp.mask, "Pictures: an EXR whose coverage (A) also limits the pixels compared");
+    cmp_cmd->add_option("--exposure", cmp.exposure, "Pictures: exposure (EV) of the tone map for display values")->capture_default_str();
+    cmp_cmd->add_option("--tonemap", cmp.tonemap, "Pictures: tone curve for display values")->capture_default_str()
+        ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
     cmp_cmd->add_option("-o,--output", cmp.output, "JSON summary ('-' = stdout)")->capture_default_str();
     cmp_cmd->add_flag("--points", cmp.points, "Also list each point's reference and baked B");
 
@@ -240,8 +266,11 @@ int main(int argc, char** argv) {
     ing_cmd->footer("Example:\n  mebake ingest a.ply b.obj -o scene.mebake --memory 2G");
     sol_cmd->footer("Example:\n  mebake solve scene.mebake --scene lights.json --order 2\n"
                     "  mebake solve scene.mebake --resume    (after an interruption)");
-    ref_cmd->footer("Example:\n  mebake reference scene.mebake --points 2000 -o ref.json");
-    cmp_cmd->footer("Example:\n  mebake compare scene.mebake ref.json");
+    ref_cmd->footer("Example:\n  mebake reference scene.mebake --points 2000 -o ref.json\n"
+                    "  mebake reference scene.mebake --image ref.exr --image ref.png --size 400x300 "
+                    "--time-limit 300");
+    cmp_cmd->footer("Example:\n  mebake compare scene.mebake ref.json\n"
+                    "  mebake compare view.exr ref.exr --diff diff.png");
     exp_cmd->footer("Example:\n  mebake export scene.mebake --lightmap lm.exr --mesh lit.glb "
                     "--vertex-colors lit.ply");
     ren_cmd->footer("Example:\n  mebake render scene.mebake --eye 0,1,3 --target 0,0,0 -o view.png "
@@ -272,7 +301,15 @@ int main(int argc, char** argv) {
             return mebake::app::RunBake(bk);
         }
         if (*exp_cmd) return mebake::app::RunExport(exp);
-        if (*ref_cmd) return mebake::app::RunReference(ref);
+        if (*ref_cmd) {
+            if (ref_target.size() == 3)
+                ref.look_at = ref_target;
+            else if (ref_target.size() == 1 && ref_target[0] >= 1e-6 && ref_target[0] <= 1)
+                ref.target = ref_target[0];
+            else if (!ref_target.empty())
+                mebake::UsageError("--target: one number (standard error, 1e-6..1) or three (x,y,z)");
+            return mebake::app::RunReference(ref);
+        }
         if (*cmp_cmd) return mebake::app::RunCompare(cmp);
         if (*ren_cmd) return mebake::app::RunRender(ren);
         if (*conv_cmd) {

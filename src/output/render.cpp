@@ -59,17 +59,9 @@ Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
 
 RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const Camera& cam = opt.camera;
-    if (cam.width < 1 || cam.height < 1 || cam.width > 16384 || cam.height > 16384)
-        UsageError("--size {}x{}: each side must be 1 to 16384 pixels", cam.width, cam.height);
-    if (!(cam.fov > 0 && cam.fov < 180))
-        UsageError("--fov {}: expected (0, 180) degrees", cam.fov);
+    const PinholeRays rays(cam);  // validates the camera
     if (opt.samples < 1 || opt.samples > 16)
         UsageError("--samples {}: expected 1 to 16", opt.samples);
-    const Vec3d forward = Normalize(cam.target - cam.eye);
-    const Vec3d right = Normalize(Cross(forward, cam.up));
-    if (!(Dot(forward, forward) > 0) || !(Dot(right, right) > 0))
-        UsageError("camera: eye and target must differ and up must not be parallel to the view");
-    const Vec3d cam_up = Cross(right, forward);
 
     // The full-resolution mesh: one Embree geometry per chart with triangles.
     const size_t n = view.chart_count();
@@ -107,8 +99,6 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     img.width = cam.width;
     img.height = cam.height;
     img.rgb.assign(size_t(cam.width) * size_t(cam.height) * 3, 0.f);
-    const double tan_half = std::tan(cam.fov * 0.5 * std::numbers::pi / 180);
-    const double aspect = double(cam.width) / cam.height;
     const int k = opt.samples;
     const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
     std::vector<uint64_t> row_hits(size_t(cam.height), 0);
@@ -120,11 +110,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
         for (int px = 0; px < cam.width; ++px)
             for (int sy = 0; sy < k; ++sy)
                 for (int sx = 0; sx < k; ++sx, ++r) {
-                    const double x = (px + (sx + 0.5) / k) / cam.width * 2 - 1;
-                    const double y = 1 - (double(py) + (sy + 0.5) / k) / cam.height * 2;
-                    const Vec3d d =
-                        forward + right * (x * tan_half * aspect) + cam_up * (y * tan_half);
-                    dirs[r] = Vec3f(Normalize(d));
+                    dirs[r] = rays.Direction(px, int(py), sx, sy, k);
                     segs[r] =
                         solve::Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
                                 dirs[r].x,        dirs[r].y,        dirs[r].z,        INFINITY};

@@ -12,6 +12,7 @@
 // shading), like the visibility scene of a full-resolution solve.
 #pragma once
 
+#include "core/camera.h"
 #include "core/vec.h"
 #include "io/exr_writer.h"
 #include "output/bake_view.h"
@@ -24,11 +25,7 @@
 
 namespace mebake::output {
 
-struct Camera {
-    Vec3d eye{0, 0, 1}, target{0, 0, 0}, up{0, 1, 0};
-    double fov = 50;  // vertical field of view, degrees, in (0, 180)
-    int width = 800, height = 600;
-};
+using mebake::Camera;  // core/camera.h: shared with the reference picture
 
 struct RenderOptions {
     Camera camera;

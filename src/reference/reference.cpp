@@ -256,6 +256,28 @@ Surface SurfaceAt(const ReferenceMesh& mesh, const solve::Scene& scene, uint32_t
 
 }  // namespace
 
+ReferencePoint PointAt(const ReferenceMesh& mesh, const solve::Scene& scene, uint32_t t,
+                       const double b[3]) {
+    const Surface s = SurfaceAt(mesh, scene, t, b);
+    ReferencePoint p;
+    p.triangle = t;
+    p.chart = mesh.chart[t];
+    p.local_triangle = mesh.local_triangle[t];
+    p.face_id = t < mesh.face_id.size() ? mesh.face_id[t] : stream::kNoId;
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t vk = mesh.triangles[t][size_t(k)];
+        p.vertex_ids[size_t(k)] = vk < mesh.vertex_id.size() ? mesh.vertex_id[vk] : stream::kNoId;
+    }
+    p.barycentric = Vec3f(float(b[0]), float(b[1]), float(b[2]));
+    p.uv = s.uv;
+    p.position = s.position;
+    p.normal = s.normal;
+    p.geometric_normal = s.geometric_normal;
+    p.albedo = s.albedo;
+    p.emission = Vec3d(s.material->emission);
+    return p;
+}
+
 std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const solve::Scene& scene,
                                                   int n, uint64_t seed) {
     if (n < 1)
@@ -282,24 +304,7 @@ std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, con
             --t;  // never a zero-area triangle
         const double su = std::sqrt(rng.Uniform()), v = rng.Uniform();
         const double b[3] = {1 - su, su * (1 - v), su * v};
-        const Surface s = SurfaceAt(mesh, scene, uint32_t(t), b);
-        ReferencePoint& p = points[size_t(i)];
-        p.triangle = uint32_t(t);
-        p.chart = mesh.chart[t];
-        p.local_triangle = mesh.local_triangle[t];
-        p.face_id = t < mesh.face_id.size() ? mesh.face_id[t] : stream::kNoId;
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t vk = mesh.triangles[t][size_t(k)];
-            p.vertex_ids[size_t(k)] =
-                vk < mesh.vertex_id.size() ? mesh.vertex_id[vk] : stream::kNoId;
-        }
-        p.barycentric = Vec3f(float(b[0]), float(b[1]), float(b[2]));
-        p.uv = s.uv;
-        p.position = s.position;
-        p.normal = s.normal;
-        p.geometric_normal = s.geometric_normal;
-        p.albedo = s.albedo;
-        p.emission = Vec3d(s.material->emission);
+        points[size_t(i)] = PointAt(mesh, scene, uint32_t(t), b);
     }
     return points;
 }
@@ -483,6 +488,11 @@ ReferenceTracer::ReferenceTracer(const ReferenceMesh& mesh, const solve::Scene& 
     : impl_(std::make_unique<Impl>(mesh, scene)) {}
 ReferenceTracer::~ReferenceTracer() = default;
 
+void ReferenceTracer::Intersect(std::span<const solve::Segment> rays,
+                                std::span<solve::Hit> hits) const {
+    impl_->vis.Intersect(rays, hits);
+}
+
 namespace {
 
 // Running sums of one point's samples: B (3) and E (9) values and their squares.
@@ -512,7 +522,8 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
             ReferencePoint& p = points[size_t(i)];
             Accum& a = acc[size_t(i)];
             for (uint64_t s = a.n; s < want[size_t(i)]; ++s) {
-                Rng rng(opt.seed, uint64_t(i), s);
+                Rng rng(opt.seed, p.stream == ReferencePoint::kIndexStream ? uint64_t(i) : p.stream,
+                        s);
                 Vec3d irr, e[3];
                 impl_->Sample(p, rng, opt, irr, e);
                 double v[12];

@@ -23,12 +23,14 @@
 
 #include "core/vec.h"
 #include "solve/scene.h"
+#include "solve/visibility.h"
 #include "stream/bake_dir.h"
 
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,7 +79,15 @@ struct ReferencePoint {
     Vec3d b{}, b_se{};
     std::array<Vec3d, 3> e{}, e_se{};  // e[c] = vector irradiance of colour c
     uint64_t samples = 0;
+    // Random stream of the point's paths: its index in the vector given to Estimate, unless
+    // set (a picture's points use their pixel's index, reference_image.h).
+    uint64_t stream = kIndexStream;
+    static constexpr uint64_t kIndexStream = ~uint64_t(0);
 };
+
+// The point of triangle t (of mesh) at barycentrics b, with what the estimator needs.
+ReferencePoint PointAt(const ReferenceMesh& mesh, const solve::Scene& scene, uint32_t t,
+                       const double b[3]);
 
 // n points, area-weighted over all triangles, deterministic for (mesh, seed).
 std::vector<ReferencePoint> ChooseReferencePoints(const ReferenceMesh& mesh, const solve::Scene& scene,
@@ -101,6 +111,10 @@ public:
     // ChooseReferencePoints). progress(round, converged points) is called after each round.
     ReferenceStats Estimate(std::vector<ReferencePoint>& points, const ReferenceOptions& options,
                             const std::function<void(int, uint64_t)>& progress = {}) const;
+
+    // First hits of rays (camera rays of a reference picture) in the tracer's scene: the
+    // hit's prim_id is the mesh triangle.
+    void Intersect(std::span<const solve::Segment> rays, std::span<solve::Hit> hits) const;
 
 private:
     struct Impl;

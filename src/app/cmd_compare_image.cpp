@@ -1,0 +1,97 @@
+// `mebake compare IMAGE REFERENCE`: two pictures of the same view scored pixel by pixel
+// (output/image_compare.h), with an optional false-colour difference PNG.
+#include "app/reference_commands.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "io/byte_stream.h"
+#include "io/png_writer.h"
+#include "output/image_compare.h"
+
+#include <cctype>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+namespace mebake::app {
+
+namespace {
+
+bool IsPicture(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    return (ext == ".png" || ext == ".exr") && !std::filesystem::is_directory(path);
+}
+
+}  // namespace
+
+bool IsPicturePair(const CompareCommand& c) {
+    return IsPicture(c.dir) || IsPicture(c.reference);
+}
+
+int RunCompareImages(const CompareCommand& c) {
+    if (!IsPicture(c.dir) || !IsPicture(c.reference))
+        UsageError("compare: give two pictures (.png or .exr) or a bake directory and a "
+                   "reference JSON, not {} and {}",
+                   c.dir, c.reference);
+    const auto curve = output::ParseToneCurve(c.tonemap);
+    if (!curve)
+        UsageError("--tonemap '{}': expected filmic, reinhard or clamp", c.tonemap);
+    const output::ToneMap tone{float(c.exposure), *curve};
+    const output::ComparedImage image = output::ReadComparedImage(c.dir);
+    const output::ComparedImage ref = output::ReadComparedImage(c.reference);
+    std::optional<output::ComparedImage> mask;
+    if (!c.mask.empty())
+        mask = output::ReadComparedImage(c.mask);
+    const output::ComparedImage* m = mask ? &*mask : nullptr;
+    if (c.borders && ref.chart.empty())
+        UsageError("--borders: {} has no chart channel (a `mebake reference --image` EXR has)",
+                   c.reference);
+    const output::ImageDifference d = output::CompareImages(image, ref, tone, m);
+    if (!d.masked)
+        spdlog::warn("compare: no coverage channel (A) in either picture or --mask: every pixel, "
+                     "the background too, is compared");
+    if (!c.diff.empty()) {
+        const auto bytes = output::DifferencePicture(image, ref, tone, c.diff_range, m, c.borders);
+        io::WritePng(c.diff, image.width, image.height, 3, bytes);
+    }
+    std::string noise;
+    if (d.noise_rms)
+        noise = fmt::format(" (reference noise {:.2f}%, without it {:.2f}%)", 100 * *d.noise_rms,
+                            100 * *d.corrected_rms);
+    if (d.border_rms)
+        noise += fmt::format("; next to chart borders ({} pixels) {:.2f}%, elsewhere {:.2f}%",
+                             d.border_pixels, 100 * *d.border_rms, 100 * *d.interior_rms);
+    spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, p95 {:.2f}%, max {:.1f}%; "
+                 "display RMS {:.2f}% ({})",
+                 c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise, 100 * d.relative_p95,
+                 100 * d.relative_max, 100 * d.display_rms,
+                 d.display ? "display values" : "radiance");
+    nlohmann::json j;
+    j["image"] = c.dir;
+    j["reference"] = c.reference;
+    j["pixels"] = d.pixels;
+    j["masked"] = d.masked;
+    j["compared_in"] = d.display ? "display" : "radiance";
+    j["mean_reference"] = d.mean_reference;
+    j["relative_rms"] = d.relative_rms;
+    j["relative_p95"] = d.relative_p95;
+    j["relative_max"] = d.relative_max;
+    j["display_rms"] = d.display_rms;
+    if (d.noise_rms) {
+        j["reference_noise_rms"] = *d.noise_rms;
+        j["corrected_rms"] = *d.corrected_rms;
+    }
+    if (d.border_rms) {
+        j["border_pixels"] = d.border_pixels;
+        j["border_rms"] = *d.border_rms;
+        j["interior_rms"] = *d.interior_rms;
+    }
+    if (!c.diff.empty())
+        j["diff"] = c.diff;
+    auto out = io::OutputStream::Open(c.output);
+    out->Write(j.dump(1) + "\n");
+    out->Commit();
+    return 0;
+}
+
+}  // namespace mebake::app

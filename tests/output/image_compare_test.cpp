@@ -1,0 +1,124 @@
+// output/image_compare.h: identical pictures score 0, a known offset scores its known RMS,
+// coverage limits the pixels, and bad input is an error naming the file.
+#include "output/image_compare.h"
+
+#include "core/error.h"
+#include "io/exr_writer.h"
+#include "io/png_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <unistd.h>
+
+namespace mebake::output {
+namespace {
+
+namespace fs = std::filesystem;
+
+ComparedImage Flat(int w, int h, float v) {
+    ComparedImage im;
+    im.path = "flat";
+    im.width = w;
+    im.height = h;
+    im.rgb.assign(size_t(w) * size_t(h) * 3, v);
+    return im;
+}
+
+TEST(ImageCompare, IdenticalPicturesScoreZero) {
+    ComparedImage a = Flat(8, 4, 0.3f);
+    a.rgb[5] = 2.f;
+    const ImageDifference d = CompareImages(a, a, ToneMap{});
+    EXPECT_EQ(d.pixels, 32u);
+    EXPECT_EQ(d.relative_rms, 0);
+    EXPECT_EQ(d.relative_max, 0);
+    EXPECT_EQ(d.display_rms, 0);
+    EXPECT_FALSE(d.masked);
+}
+
+TEST(ImageCompare, KnownOffsetGivesItsRms) {
+    // Reference 2 everywhere; the image is 2.2 on half the pixels and 2 on the rest:
+    // RMS = sqrt(0.5 * 0.2^2) / 2 = 7.07 %, max and p95 = 10 %.
+    const ComparedImage ref = Flat(10, 10, 2.f);
+    ComparedImage im = Flat(10, 10, 2.f);
+    for (size_t p = 0; p < 50; ++p)
+        for (int c = 0; c < 3; ++c)
+            im.rgb[3 * p + size_t(c)] = 2.2f;
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_NEAR(d.relative_rms, std::sqrt(0.5) * 0.1, 1e-6);
+    EXPECT_NEAR(d.relative_max, 0.1, 1e-6);
+    EXPECT_NEAR(d.relative_p95, 0.1, 1e-6);
+    EXPECT_GT(d.display_rms, 0);
+}
+
+TEST(ImageCompare, CoverageAndNoise) {
+    ComparedImage ref = Flat(4, 1, 1.f);
+    ref.coverage = {1, 1, 0.5f, 0};  // only the first two pixels count
+    ref.se.assign(12, 0.03f);
+    ComparedImage im = Flat(4, 1, 1.f);
+    for (int c = 0; c < 3; ++c) {
+        im.rgb[size_t(c)] = 1.05f;      // counted: 5 % off
+        im.rgb[6 + size_t(c)] = 100.f;  // not counted
+    }
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_TRUE(d.masked);
+    EXPECT_EQ(d.pixels, 2u);
+    EXPECT_NEAR(d.relative_rms, 0.05 / std::sqrt(2.0), 1e-6);
+    ASSERT_TRUE(d.noise_rms.has_value());
+    EXPECT_NEAR(*d.noise_rms, 0.03, 1e-6);
+    EXPECT_NEAR(*d.corrected_rms, std::sqrt(0.05 * 0.05 / 2 - 0.03 * 0.03), 1e-6);
+    // The difference picture: red where brighter, white where equal, grey outside.
+    const auto rgb = DifferencePicture(im, ref, ToneMap{}, 0.1);
+    EXPECT_EQ(rgb[0], 255);
+    EXPECT_LT(rgb[1], 255);
+    EXPECT_EQ(rgb[3], 255);
+    EXPECT_EQ(rgb[4], 255);
+    EXPECT_EQ(rgb[9], rgb[10]);
+    EXPECT_LT(rgb[9], 255);
+}
+
+TEST(ImageCompare, ChartBordersSplitTheRms) {
+    // Charts 0 | 1 side by side: pixels 1 and 2 touch the border, 0 and 3 do not.
+    ComparedImage ref = Flat(4, 1, 1.f);
+    ref.chart = {0, 0, 1, 1};
+    ComparedImage im = Flat(4, 1, 1.f);
+    for (int c = 0; c < 3; ++c)
+        im.rgb[3 + size_t(c)] = 1.2f;  // 20 % off at pixel 1
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_EQ(d.border_pixels, 2u);
+    ASSERT_TRUE(d.border_rms.has_value());
+    EXPECT_NEAR(*d.border_rms, 0.2 / std::sqrt(2.0), 1e-6);
+    EXPECT_EQ(*d.interior_rms, 0);
+    // The overlay: a black line on pixel 1 (its right neighbour is another chart).
+    const auto rgb = DifferencePicture(im, ref, ToneMap{}, 0.1, nullptr, true);
+    EXPECT_EQ(rgb[3] + rgb[4] + rgb[5], 0);
+    EXPECT_EQ(rgb[0], 255);
+}
+
+TEST(ImageCompare, ReadsExrAndPngAndRejectsBadInput) {
+    const fs::path dir = fs::temp_directory_path() / ("mebake-imgcmp-" + std::to_string(getpid()));
+    fs::create_directories(dir);
+    const std::string exr = (dir / "a.exr").string(), png = (dir / "a.png").string();
+    io::WriteExr(exr, 2, 1, {"R", "G", "B", "A"}, std::vector<float>{1, 2, 3, 1, 4, 5, 6, 0});
+    io::WritePng(png, 3, 1, 3, std::vector<uint8_t>(9, 255));
+    const ComparedImage e = ReadComparedImage(exr);
+    EXPECT_TRUE(e.linear);
+    EXPECT_EQ(e.rgb[4], 5.f);
+    EXPECT_EQ(e.coverage[1], 0.f);
+    const ComparedImage p = ReadComparedImage(png);
+    EXPECT_FALSE(p.linear);
+    EXPECT_EQ(p.rgb[0], 1.f);
+    try {
+        CompareImages(e, p, ToneMap{});
+        FAIL() << "sizes differ";
+    } catch (const Error& err) {
+        EXPECT_EQ(err.kind(), ErrorKind::Input);
+        EXPECT_NE(std::string(err.what()).find("a.png"), std::string::npos);
+    }
+    EXPECT_THROW(ReadComparedImage((dir / "missing.exr").string()), Error);
+    EXPECT_THROW(ReadComparedImage((dir / "a.tif").string()), Error);
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace mebake::output
