@@ -1,0 +1,48 @@
+// What the viewer's page loads for a solved bake: the mesh in chunks of whole charts
+// (web_glb.h), the light map and the three vector-irradiance maps per atlas page as
+// half-float OpenEXR (R G B A, which three.js's EXRLoader reads), and view.json tying
+// them together (pages, chunks, the scene's sky, the default camera of `mebake render`).
+//
+// Files, in `out`:
+//   view.json
+//   mesh.NNN.glb          chunk NNN: about `chunk_triangles` triangles, chart by chart
+//   lightmap.P.exr        page P: R G B = B (W/m^2), A = 1 on chart blocks
+//   E.x.P.exr E.y.P.exr E.z.P.exr   page P: R G B = that component of E per colour, A = 1
+// The maps are the ones `mebake export --lightmap/--irradiance` writes (output/lightmap.h),
+// split into RGBA layers; pages are at most `max_atlas` texels per side (WebGL's usual
+// texture limit is 4096 to 16384).
+#pragma once
+
+#include "output/bake_view.h"
+
+#include <cstdint>
+#include <string>
+
+namespace mebake::view {
+
+struct WebDataOptions {
+    uint32_t max_atlas = 4096;
+    uint32_t gutter = 2;
+    uint64_t chunk_triangles = 65536;
+    bool meshopt = true;  // EXT_meshopt_compression in the chunks
+};
+
+struct WebDataStats {
+    uint64_t triangles = 0, vertices = 0, chunks = 0;
+    uint64_t mesh_bytes = 0;  // all chunks
+    uint32_t pages = 0;
+};
+
+// A bake directory itself, or an output directory of `mebake bake` holding scene.mebake:
+// the bake directory to open. Throws Error(Usage) naming `dir` when it is neither.
+std::string ResolveBakeDirectory(const std::string& dir);
+
+// Writes the viewer's data for the solved bake at `bake_dir` into `out` (created; files
+// replaced). Throws what OpenBakeView throws for an unsolved or broken bake.
+WebDataStats WriteWebData(const std::string& bake_dir, const std::string& out,
+                          const WebDataOptions& options = {});
+
+// True when `out` holds view.json written after the bake's solution.
+bool WebDataCurrent(const std::string& bake_dir, const std::string& out);
+
+}  // namespace mebake::view
