@@ -23,6 +23,7 @@ uniform bool useVertexColors;
 uniform float colorFactor;
 uniform float glossyExponent;
 uniform float glossyWeight;
+uniform bool leaves;       // outline the quadtree leaves (light-map alpha = 1 + leaf level)
 
 in vec3 vPosition;
 in vec3 vNormal;
@@ -99,5 +100,18 @@ void main() {
     vec3 radiance = gl_FrontFacing ? shade() : vec3(0.0);
     vec3 display;
     for (int c = 0; c < 3; ++c) display[c] = encodeSrgb(toneCurve(radiance[c]));
+    if (leaves) {
+        // The leaf's level at this texel (no filtering), then the distance in pixels to
+        // the nearest line of that level's grid in the chart's square.
+        vec2 st = vec2(vAtlasUv.x, 1.0 - vAtlasUv.y);
+        ivec2 size = textureSize(lightMap, 0);
+        ivec2 texel = clamp(ivec2(st * vec2(size)), ivec2(0), size - 1);
+        float level = texelFetch(lightMap, texel, 0).a - 1.0;
+        if (level >= 0.0) {
+            vec2 g = vChartUv * exp2(floor(level + 0.5));
+            vec2 d = abs(fract(g - 0.5) - 0.5) / max(fwidth(g), vec2(1e-6));
+            display = mix(vec3(0.1, 0.85, 1.0), display, clamp(min(d.x, d.y), 0.0, 1.0));
+        }
+    }
     fragColor = vec4(display, 1.0);
 }

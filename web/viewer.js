@@ -4,7 +4,7 @@
 //   eye=x,y,z target=x,y,z up=x,y,z fov=deg   camera (default: render's default view)
 //   mode=lightmap|diffuse|glossy exposure=EV tonemap=filmic|reinhard|clamp
 //   background=r,g,b (radiance of the background; default: the scene's sky)
-//   exponent=k weight=w (override every material's glossy lobe) borders=1 ui=0
+//   exponent=k weight=w (override every material's glossy lobe) borders=1 leaves=1 ui=0
 // window.mebakeView reports progress to tests and benchmarks (firstFrameMs, readyMs,
 // frames) and measureFrameTime(n) times n redraws.
 import * as THREE from 'three';
@@ -49,7 +49,7 @@ function loadExr(url) {
 
 const ui = {};
 for (const id of ['mode', 'exposure', 'exposureValue', 'tonemap', 'override', 'exponent',
-                  'exponentValue', 'weight', 'weightValue', 'borders', 'status', 'panel'])
+                  'exponentValue', 'weight', 'weightValue', 'borders', 'leaves', 'status', 'panel'])
   ui[id] = document.getElementById(id);
 
 const settings = {
@@ -60,6 +60,7 @@ const settings = {
   exponent: Number(params.get('exponent') || 30),
   weight: Number(params.get('weight') || 0.2),
   borders: params.get('borders') === '1',
+  leaves: params.get('leaves') === '1',
 };
 if (!(settings.mode in MODES)) throw new Error(`mode=${settings.mode}: expected lightmap, diffuse or glossy`);
 if (!(settings.tonemap in CURVES)) throw new Error(`tonemap=${settings.tonemap}: expected filmic, reinhard or clamp`);
@@ -82,6 +83,10 @@ let needsDraw = true;
 function applySettings() {
   for (const m of surfaces) {
     m.uniforms.mode.value = MODES[settings.mode];
+    m.uniforms.leaves.value = settings.leaves;
+    // Surfaces a little behind their depth so that chart borders drawn on them show; only
+    // then, as the slope-scaled offset can let a back face win at a silhouette.
+    m.polygonOffset = settings.borders;
     m.uniforms.exposure.value = settings.exposure;
     m.uniforms.curve.value = CURVES[settings.tonemap];
     const own = m.userData.mebake;
@@ -107,6 +112,7 @@ function bindUi() {
   ui.exponent.value = settings.exponent;
   ui.weight.value = settings.weight;
   ui.borders.checked = settings.borders;
+  ui.leaves.checked = settings.leaves;
   ui.mode.onchange = () => { settings.mode = ui.mode.value; applySettings(); };
   ui.tonemap.onchange = () => { settings.tonemap = ui.tonemap.value; applySettings(); };
   ui.exposure.oninput = () => { settings.exposure = Number(ui.exposure.value); applySettings(); };
@@ -114,6 +120,7 @@ function bindUi() {
   ui.exponent.oninput = () => { settings.exponent = Number(ui.exponent.value); settings.override = ui.override.checked = true; applySettings(); };
   ui.weight.oninput = () => { settings.weight = Number(ui.weight.value); settings.override = ui.override.checked = true; applySettings(); };
   ui.borders.onchange = () => { settings.borders = ui.borders.checked; applySettings(); };
+  ui.leaves.onchange = () => { settings.leaves = ui.leaves.checked; applySettings(); };
 }
 
 function setupCamera(view) {
@@ -183,6 +190,7 @@ function surfaceMaterial(extras, textures, shaders, hasColor, radiosity) {
     vertexShader: shaders.vert,
     fragmentShader: shaders.frag,
     side: THREE.DoubleSide,
+    polygonOffsetFactor: 1, polygonOffsetUnits: 1,
     defines: hasColor ? { HAS_COLOR: 1 } : {},
     uniforms: {
       lightMap: { value: page.lightmap }, irradianceX: { value: page.x },
@@ -195,6 +203,7 @@ function surfaceMaterial(extras, textures, shaders, hasColor, radiosity) {
       colorFactor: { value: extras.color_factor },
       glossyExponent: { value: extras.glossy_exponent },
       glossyWeight: { value: extras.glossy_weight },
+      leaves: { value: false },
     },
   });
   m.userData.mebake = extras;

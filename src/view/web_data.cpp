@@ -35,6 +35,27 @@ void WriteFile(const std::string& path, std::span<const uint8_t> bytes) {
     out->Commit();
 }
 
+// Alpha of the light map inside each chart square of page p: 1 + the level of the quadtree
+// leaf holding the texel's centre (the page's overlay of leaves reads it back).
+void MarkLeafLevels(const output::BakeView& view, const output::Atlas& atlas, uint32_t p,
+                    std::vector<float>& rgba) {
+    const uint32_t width = atlas.pages[p].width;
+    for (uint32_t c = 0; c < atlas.charts.size(); ++c) {
+        const output::AtlasChart& ac = atlas.charts[c];
+        if (ac.page != p)
+            continue;
+        const auto field = view.Field(c);
+        const uint32_t r = ac.resolution;
+        for (uint32_t j = 0; j < r; ++j)
+            for (uint32_t i = 0; i < r; ++i) {
+                double s, t;
+                const size_t leaf = field->LeafAt((i + 0.5) / r, (j + 0.5) / r, &s, &t);
+                const size_t x = ac.x + atlas.gutter + i, y = ac.y + atlas.gutter + j;
+                rgba[(y * width + x) * 4 + 3] = 1.f + float(field->node(leaf).level);
+            }
+    }
+}
+
 // Page p's light map and E maps, as RGBA half EXRs named <layer>.<p>.exr.
 void WritePageMaps(const output::BakeView& view, const output::Atlas& atlas, uint32_t p,
                    const std::string& out) {
@@ -50,7 +71,9 @@ void WritePageMaps(const output::BakeView& view, const output::Atlas& atlas, uin
                                       rgba.begin() + ptrdiff_t(first) * page.width * 4);
                             (void)rows;
                         });
-    eo.comments = "mebake view: B (W/m^2) in R G B, A = 1 on chart blocks";
+    MarkLeafLevels(view, atlas, p, rgba);
+    eo.comments = "mebake view: B (W/m^2) in R G B, A = 1 + quadtree leaf level in chart "
+                  "squares, 1 in gutters, 0 elsewhere";
     io::WriteExr(fmt::format("{}/lightmap.{}.exr", out, p), int(page.width), int(page.height),
                  {"R", "G", "B", "A"}, rgba, eo);
     std::vector<float> e(texels * 9);

@@ -6,7 +6,8 @@
 // Files, in `out`:
 //   view.json
 //   mesh.NNN.glb          chunk NNN: about `chunk_triangles` triangles, chart by chart
-//   lightmap.P.exr        page P: R G B = B (W/m^2), A = 1 on chart blocks
+//   lightmap.P.exr        page P: R G B = B (W/m^2), A = 1 + the quadtree leaf level in
+//                         chart squares (1 in gutters, 0 on unused texels)
 //   E.x.P.exr E.y.P.exr E.z.P.exr   page P: R G B = that component of E per colour, A = 1
 // The maps are the ones `mebake export --lightmap/--irradiance` writes (output/lightmap.h),
 // split into RGBA layers; pages are at most `max_atlas` texels per side (WebGL's usual

@@ -67,7 +67,7 @@ try {
   page.on('console', (m) => logs.push(`${m.type()}: ${m.text()}`));
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
   for (const shot of args.shots) {
-    await page.goto(`${url}?ui=0&${shot.query}`);
+    await page.goto(`${url}?${shot.query.includes("ui=") ? "" : "ui=0&"}${shot.query}`);
     await page.waitForFunction(
       () => window.mebakeView && (window.mebakeView.readyMs !== null || window.mebakeView.error),
       null, { timeout: 120000, polling: 100 });
