@@ -5,15 +5,16 @@
 //   mode=lightmap|diffuse|glossy exposure=EV tonemap=filmic|reinhard|clamp
 //   background=r,g,b (radiance of the background; default: the scene's sky)
 //   exponent=k weight=w (override every material's glossy lobe) borders=1 leaves=1 ui=0
-// window.mebakeView reports progress to tests and benchmarks (firstFrameMs, readyMs,
-// frames) and measureFrameTime(n) times n redraws.
+// window.mebakeView reports progress to tests and benchmarks (lightMapMs, mapsMs: light
+// maps, all maps decoded; firstFrameMs: first chunk drawn (in light-map mode while the
+// E maps decode), readyMs: all drawn; from navigation start; frames) and measureFrameTime(n) times n redraws.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
 
-const state = { firstFrameMs: null, readyMs: null, frames: 0, chunksLoaded: 0, error: null };
+const state = { lightMapMs: null, mapsMs: null, firstFrameMs: null, readyMs: null, frames: 0, chunksLoaded: 0, error: null };
 window.mebakeView = state;
 
 const params = new URLSearchParams(location.search);
@@ -78,11 +79,12 @@ const controls = new OrbitControls(camera, renderer.domElement);
 const surfaces = [];  // RawShaderMaterials of the surfaces
 const borders = [];   // chart outline line segments
 let sky = null;
+let irradianceReady = false;  // until then surfaces show the light map
 let needsDraw = true;
 
 function applySettings() {
   for (const m of surfaces) {
-    m.uniforms.mode.value = MODES[settings.mode];
+    m.uniforms.mode.value = irradianceReady ? MODES[settings.mode] : MODES.lightmap;
     m.uniforms.leaves.value = settings.leaves;
     // Surfaces a little behind their depth so that chart borders drawn on them show; only
     // then, as the slope-scaled offset can let a back face win at a silhouette.
@@ -183,6 +185,13 @@ function updateSky() {
   u.up.value.multiplyScalar(t);
 }
 
+function setIrradiance(m, textures) {
+  const page = textures[m.userData.mebake.page];
+  m.uniforms.irradianceX.value = page.x;
+  m.uniforms.irradianceY.value = page.y;
+  m.uniforms.irradianceZ.value = page.z;
+}
+
 function surfaceMaterial(extras, textures, shaders, hasColor, radiosity) {
   const page = textures[extras.page];
   const m = new THREE.RawShaderMaterial({
@@ -193,8 +202,9 @@ function surfaceMaterial(extras, textures, shaders, hasColor, radiosity) {
     polygonOffsetFactor: 1, polygonOffsetUnits: 1,
     defines: hasColor ? { HAS_COLOR: 1 } : {},
     uniforms: {
-      lightMap: { value: page.lightmap }, irradianceX: { value: page.x },
-      irradianceY: { value: page.y }, irradianceZ: { value: page.z },
+      // The light map stands in for E until the irradiance maps are decoded.
+      lightMap: { value: page.lightmap }, irradianceX: { value: page.x || page.lightmap },
+      irradianceY: { value: page.y || page.lightmap }, irradianceZ: { value: page.z || page.lightmap },
       mode: { value: 2 }, radiosity: { value: radiosity }, exposure: { value: 0 },
       curve: { value: 0 }, eye: { value: new THREE.Vector3() },
       albedo: { value: new THREE.Vector3(...extras.albedo) },
@@ -272,12 +282,21 @@ async function main() {
   applySettings();
   requestAnimationFrame(loop);
 
-  ui.status.textContent = `loading maps (${view.pages.length} page${view.pages.length > 1 ? 's' : ''})`;
-  const textures = await Promise.all(view.pages.map(async (_, p) => {
-    const [lightmap, x, y, z] = await Promise.all(
-      ['lightmap', 'E.x', 'E.y', 'E.z'].map((n) => loadExr(`data/${n}.${p}.exr`)));
-    return { lightmap, x, y, z };
-  }));
+  // The light maps first: chunks are drawn in light-map mode as soon as they arrive, while
+  // the vector-irradiance maps (three times the data) are still decoding.
+  ui.status.textContent = `loading light map (${view.pages.length} page${view.pages.length > 1 ? 's' : ''})`;
+  const textures = await Promise.all(view.pages.map(async (_, p) => ({
+    lightmap: await loadExr(`data/lightmap.${p}.exr`), x: null, y: null, z: null })));
+  state.lightMapMs = performance.now();
+  const irradiance = Promise.all(view.pages.map(async (_, p) => {
+    const [x, y, z] = await Promise.all(['E.x', 'E.y', 'E.z'].map((n) => loadExr(`data/${n}.${p}.exr`)));
+    Object.assign(textures[p], { x, y, z });
+  })).then(() => {
+    for (const m of surfaces) setIrradiance(m, textures);
+    irradianceReady = true;
+    state.mapsMs = performance.now();
+    applySettings();
+  });
   const loader = new GLTFLoader();
   loader.setMeshoptDecoder(MeshoptDecoder);
   const radiosity = view.unknown === 'radiosity';
@@ -290,7 +309,8 @@ async function main() {
     state.chunksLoaded = i + 1;
     ui.status.textContent = `${view.triangles.toLocaleString()} triangles: chunk ${i + 1} of ${view.chunks.length}`;
   }
-  // Ready once a frame with every chunk has been drawn.
+  await irradiance;
+  // Ready once a frame with every chunk and every map has been drawn.
   needsDraw = true;
   await new Promise((resolve) => {
     const wait = () => (needsDraw ? requestAnimationFrame(wait) : resolve());

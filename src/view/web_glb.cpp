@@ -26,6 +26,31 @@ void Append32(std::vector<uint8_t>& b, uint32_t v) {
         b.push_back(uint8_t(v >> (8 * k)));
 }
 
+template <typename T>
+void Remap(std::vector<T>& v, const std::vector<uint32_t>& remap, size_t unique) {
+    if (v.empty())
+        return;
+    std::vector<T> out(unique);
+    meshopt_remapVertexBuffer(out.data(), v.data(), v.size(), sizeof(T), remap.data());
+    v = std::move(out);
+}
+
+// Triangles in vertex-cache order and vertices in first-use order (meshoptimizer): the
+// same mesh, but the index deltas and neighbouring vertices the encoder sees are small.
+void OptimizeOrder(GlbPrimitive& p) {
+    const size_t n = p.position.size();
+    meshopt_optimizeVertexCache(p.indices.data(), p.indices.data(), p.indices.size(), n);
+    std::vector<uint32_t> remap(n);
+    const size_t unique =
+        meshopt_optimizeVertexFetchRemap(remap.data(), p.indices.data(), p.indices.size(), n);
+    meshopt_remapIndexBuffer(p.indices.data(), p.indices.data(), p.indices.size(), remap.data());
+    Remap(p.position, remap, unique);
+    Remap(p.normal, remap, unique);
+    Remap(p.atlas_uv, remap, unique);
+    Remap(p.chart_uv, remap, unique);
+    Remap(p.color, remap, unique);
+}
+
 }  // namespace
 
 uint32_t WebGlb::AddMaterial(const std::string& name, nlohmann::json extras) {
@@ -104,6 +129,8 @@ void WebGlb::AddPrimitive(GlbPrimitive p) {
     CHECK(p.normal.size() == n && p.atlas_uv.size() == n && p.chart_uv.size() == n);
     CHECK(p.color.empty() || p.color.size() == n);
     CHECK_EQ(p.indices.size() % (p.lines ? 2 : 3), 0u);
+    if (meshopt_ && !p.lines)
+        OptimizeOrder(p);
     Vec3f lo = p.position[0], hi = p.position[0];
     for (const Vec3f& q : p.position)
         for (int k = 0; k < 3; ++k) {

@@ -7,10 +7,11 @@
 // triangles or line segments (the chart outlines) and name a material whose `extras` hold
 // the scene material's parameters.
 //
-// With `meshopt`, every buffer view is stored encoded by meshoptimizer
-// (meshopt_encodeVertexBuffer / meshopt_encodeIndexBuffer, lossless) under the extension
-// EXT_meshopt_compression in the binary chunk (buffer 0), with a fallback buffer 1 that has no data
-// (the extension is then required, as its specification allows).
+// With `meshopt`, triangles are reordered for the vertex cache and vertices by first use
+// (the same mesh; the encoding gains from small deltas), and every buffer view is stored encoded by
+// meshoptimizer (meshopt_encodeVertexBuffer / meshopt_encodeIndexBuffer, lossless) under the
+// extension EXT_meshopt_compression in the binary chunk (buffer 0), with a fallback buffer 1 that
+// has no data (the extension is then required, as its specification allows).
 #pragma once
 
 #include "core/vec.h"
