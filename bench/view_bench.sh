@@ -19,7 +19,7 @@ for bake in "$@"; do
       --mebake "$build/src/app/mebake" --dir "$bake" --size 800x600 --extra "$extra" \
       --shot /tmp/view-bench-1.png=mode=glossy --shot /tmp/view-bench-2.png=mode=glossy --frames 20 2>/dev/null)
     mesh=$(du -cb "$bake"/web/mesh.*.glb | tail -1 | cut -f1)
-    maps=$(du -cb "$bake"/web/*.exr | tail -1 | cut -f1)
+    maps=$(du -cb "$bake"/web/*.half | tail -1 | cut -f1)
     tris=$(grep -o '"triangles": [0-9]*' "$bake/web/view.json" | grep -o '[0-9]*$')
     chunks=$(ls "$bake"/web/mesh.*.glb | wc -l)
     echo "$bake $variant triangles=$tris chunks=$chunks mesh_bytes=$mesh map_bytes=$maps $json"

@@ -62,8 +62,7 @@ vec3 surfaceAlbedo() {
 }
 
 vec3 shade() {
-    // EXRLoader stores the file's last row first: glTF's v (from the top) is 1 - t.
-    vec2 st = vec2(vAtlasUv.x, 1.0 - vAtlasUv.y);
+    vec2 st = vAtlasUv;  // maps are uploaded top row first: glTF's uv is the texture's
     if (mode == 0 || radiosity) {
         vec3 b = max(texture(lightMap, st).rgb, 0.0);
         return b / PI;
@@ -103,7 +102,7 @@ void main() {
     if (leaves) {
         // The leaf's level at this texel (no filtering), then the distance in pixels to
         // the nearest line of that level's grid in the chart's square.
-        vec2 st = vec2(vAtlasUv.x, 1.0 - vAtlasUv.y);
+        vec2 st = vAtlasUv;
         ivec2 size = textureSize(lightMap, 0);
         ivec2 texel = clamp(ivec2(st * vec2(size)), ivec2(0), size - 1);
         float level = texelFetch(lightMap, texel, 0).a - 1.0;

@@ -1,20 +1,20 @@
-// mebake viewer: loads data/view.json, the light map and vector-irradiance maps (EXR) of
-// every atlas page, then the mesh chunks one after another, drawing as they arrive.
+// mebake viewer: loads data/view.json, the light map and vector-irradiance maps of every
+// atlas page (half floats, web_data.h), then the mesh chunks one after another, drawing as they arrive.
 // URL parameters (all optional), the same as `mebake render`'s options:
 //   eye=x,y,z target=x,y,z up=x,y,z fov=deg   camera (default: render's default view)
 //   mode=lightmap|diffuse|glossy exposure=EV tonemap=filmic|reinhard|clamp
 //   background=r,g,b (radiance of the background; default: the scene's sky)
 //   exponent=k weight=w (override every material's glossy lobe) borders=1 leaves=1 ui=0
-// window.mebakeView reports progress to tests and benchmarks (lightMapMs, mapsMs: light
+// window.mebakeView reports progress to tests and benchmarks (moduleMs: this module (and
+// three.js) loaded and running; lightMapMs, mapsMs: light
 // maps, all maps decoded; firstFrameMs: first chunk drawn (in light-map mode while the
 // E maps decode), readyMs: all drawn; from navigation start; frames) and measureFrameTime(n) times n redraws.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
 
-const state = { lightMapMs: null, mapsMs: null, firstFrameMs: null, readyMs: null, frames: 0, chunksLoaded: 0, error: null };
+const state = { moduleMs: performance.now(), lightMapMs: null, mapsMs: null, firstFrameMs: null, readyMs: null, frames: 0, chunksLoaded: 0, error: null };
 window.mebakeView = state;
 
 const params = new URLSearchParams(location.search);
@@ -36,16 +36,23 @@ async function fetchText(url) {
   return r.text();
 }
 
-function loadExr(url) {
-  return new Promise((resolve, reject) => {
-    new EXRLoader().load(url, (t) => {
-      t.minFilter = THREE.LinearFilter;
-      t.magFilter = THREE.LinearFilter;
-      t.generateMipmaps = false;
-      t.wrapS = t.wrapT = THREE.ClampToEdgeWrapping;
-      resolve(t);
-    }, undefined, () => reject(new Error(`${url}: could not load`)));
-  });
+// A map page: RGBA half floats, rows from the top, zlib-compressed (web_data.h), inflated
+// by the browser and uploaded as is. Row 0 at t = 0 puts glTF's top-left uv origin right.
+async function loadHalfMap(url, page) {
+  const r = await fetch(url);
+  if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+  const bytes = await new Response(r.body.pipeThrough(new DecompressionStream('deflate'))).arrayBuffer();
+  const n = page.width * page.height * 4;
+  if (bytes.byteLength !== 2 * n)
+    throw new Error(`${url}: ${bytes.byteLength} bytes, expected ${2 * n} (${page.width}x${page.height} RGBA half)`);
+  const t = new THREE.DataTexture(new Uint16Array(bytes), page.width, page.height,
+                                  THREE.RGBAFormat, THREE.HalfFloatType);
+  t.minFilter = THREE.LinearFilter;
+  t.magFilter = THREE.LinearFilter;
+  t.generateMipmaps = false;
+  t.wrapS = t.wrapT = THREE.ClampToEdgeWrapping;
+  t.needsUpdate = true;
+  return t;
 }
 
 const ui = {};
@@ -285,11 +292,11 @@ async function main() {
   // The light maps first: chunks are drawn in light-map mode as soon as they arrive, while
   // the vector-irradiance maps (three times the data) are still decoding.
   ui.status.textContent = `loading light map (${view.pages.length} page${view.pages.length > 1 ? 's' : ''})`;
-  const textures = await Promise.all(view.pages.map(async (_, p) => ({
-    lightmap: await loadExr(`data/lightmap.${p}.exr`), x: null, y: null, z: null })));
+  const textures = await Promise.all(view.pages.map(async (page, p) => ({
+    lightmap: await loadHalfMap(`data/lightmap.${p}.half`, page), x: null, y: null, z: null })));
   state.lightMapMs = performance.now();
-  const irradiance = Promise.all(view.pages.map(async (_, p) => {
-    const [x, y, z] = await Promise.all(['E.x', 'E.y', 'E.z'].map((n) => loadExr(`data/${n}.${p}.exr`)));
+  const irradiance = Promise.all(view.pages.map(async (page, p) => {
+    const [x, y, z] = await Promise.all(['E.x', 'E.y', 'E.z'].map((n) => loadHalfMap(`data/${n}.${p}.half`, page)));
     Object.assign(textures[p], { x, y, z });
   })).then(() => {
     for (const m of surfaces) setIrradiance(m, textures);

@@ -69,7 +69,7 @@ void AddRoutes(httplib::Server& svr, const std::string& data) {
     if (!svr.set_mount_point("/data", data))
         IoError({data}, "cannot serve this directory");
     svr.set_file_extension_and_mimetype_mapping("glb", "model/gltf-binary");
-    svr.set_file_extension_and_mimetype_mapping("exr", "image/x-exr");
+    svr.set_file_extension_and_mimetype_mapping("half", "application/octet-stream");
     svr.Get(R"(/(.*))", [](const httplib::Request& req, httplib::Response& res) {
         std::string path = req.matches[1];
         if (path == "favicon.ico") {

@@ -3,7 +3,6 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "io/byte_stream.h"
-#include "io/exr_writer.h"
 #include "output/atlas.h"
 #include "output/lightmap.h"
 #include "output/render.h"
@@ -11,9 +10,14 @@
 #include "stream/bake_dir.h"
 #include "view/web_glb.h"
 
+#include <Imath/half.h>
+
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <zlib.h>
 
 namespace mebake::view {
 
@@ -56,32 +60,40 @@ void MarkLeafLevels(const output::BakeView& view, const output::Atlas& atlas, ui
     }
 }
 
-// Page p's light map and E maps, as RGBA half EXRs named <layer>.<p>.exr.
+// RGBA floats as half-float texels, zlib-compressed (RFC 1950): what the browser inflates
+// natively (DecompressionStream "deflate") and uploads as is. EXR decoding in JavaScript
+// took 7-9 s for one 2048-texel page on the 2-core VM.
+void WriteHalfMap(const std::string& path, std::span<const float> rgba) {
+    std::vector<uint16_t> half(rgba.size());
+    for (size_t i = 0; i < rgba.size(); ++i)
+        half[i] = imath_float_to_half(
+            std::isfinite(rgba[i]) ? std::clamp(rgba[i], -65504.f, 65504.f) : 0.f);
+    const uLong raw = uLong(half.size() * 2);
+    std::vector<uint8_t> z(compressBound(raw));
+    uLongf len = z.size();
+    if (compress2(z.data(), &len, reinterpret_cast<const Bytef*>(half.data()), raw, 6) != Z_OK)
+        IoError({path}, "zlib compression failed");
+    WriteFile(path, {z.data(), size_t(len)});
+}
+
+// Page p's light map and E maps as <layer>.<p>.half (see web_data.h).
 void WritePageMaps(const output::BakeView& view, const output::Atlas& atlas, uint32_t p,
                    const std::string& out) {
     const auto& page = atlas.pages[p];
     const size_t texels = size_t(page.width) * page.height;
-    io::ExrOptions eo;
-    eo.type = io::ExrPixelType::Half;
-    eo.compression = io::ExrCompression::Zip;
     std::vector<float> rgba(texels * 4);
     output::ComputePage(view, atlas, p, output::MapContent::Radiosity,
-                        [&](std::span<const float> px, uint32_t first, uint32_t rows) {
+                        [&](std::span<const float> px, uint32_t first, uint32_t) {
                             std::copy(px.begin(), px.end(),
                                       rgba.begin() + ptrdiff_t(first) * page.width * 4);
-                            (void)rows;
                         });
     MarkLeafLevels(view, atlas, p, rgba);
-    eo.comments = "mebake view: B (W/m^2) in R G B, A = 1 + quadtree leaf level in chart "
-                  "squares, 1 in gutters, 0 elsewhere";
-    io::WriteExr(fmt::format("{}/lightmap.{}.exr", out, p), int(page.width), int(page.height),
-                 {"R", "G", "B", "A"}, rgba, eo);
+    WriteHalfMap(fmt::format("{}/lightmap.{}.half", out, p), rgba);
     std::vector<float> e(texels * 9);
     output::ComputePage(view, atlas, p, output::MapContent::Irradiance,
-                        [&](std::span<const float> px, uint32_t first, uint32_t rows) {
+                        [&](std::span<const float> px, uint32_t first, uint32_t) {
                             std::copy(px.begin(), px.end(),
                                       e.begin() + ptrdiff_t(first) * page.width * 9);
-                            (void)rows;
                         });
     const char* axis = "xyz";
     for (int a = 0; a < 3; ++a) {
@@ -91,9 +103,7 @@ void WritePageMaps(const output::BakeView& view, const output::Atlas& atlas, uin
                 rgba[4 * t + size_t(c)] = e[9 * t + size_t(3 * a + c)];
             rgba[4 * t + 3] = 1;
         }
-        eo.comments = fmt::format("mebake view: E.{} (W/m^2) per colour in R G B", axis[a]);
-        io::WriteExr(fmt::format("{}/E.{}.{}.exr", out, axis[a], p), int(page.width),
-                     int(page.height), {"R", "G", "B", "A"}, rgba, eo);
+        WriteHalfMap(fmt::format("{}/E.{}.{}.half", out, axis[a], p), rgba);
     }
 }
 

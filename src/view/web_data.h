@@ -1,14 +1,18 @@
 // What the viewer's page loads for a solved bake: the mesh in chunks of whole charts
 // (web_glb.h), the light map and the three vector-irradiance maps per atlas page as
-// half-float OpenEXR (R G B A, which three.js's EXRLoader reads), and view.json tying
-// them together (pages, chunks, the scene's sky, the default camera of `mebake render`).
+// half-float RGBA texels, and view.json tying them together (pages, chunks, the scene's
+// sky, the default camera of `mebake render`).
 //
 // Files, in `out`:
 //   view.json
 //   mesh.NNN.glb          chunk NNN: about `chunk_triangles` triangles, chart by chart
-//   lightmap.P.exr        page P: R G B = B (W/m^2), A = 1 + the quadtree leaf level in
+//   lightmap.P.half       page P: R G B = B (W/m^2), A = 1 + the quadtree leaf level in
 //                         chart squares (1 in gutters, 0 on unused texels)
-//   E.x.P.exr E.y.P.exr E.z.P.exr   page P: R G B = that component of E per colour, A = 1
+//   E.x.P.half E.y.P.half E.z.P.half   page P: R G B = that component of E per colour, A = 1
+// A .half file is the page's texels, rows from the top, 4 IEEE half floats each (little
+// endian), zlib-compressed (RFC 1950): the browser inflates it natively and uploads it as
+// a half-float texture without decoding. (Three.js's EXRLoader, decoding in JavaScript,
+// took 7-9 s per 2048-texel page here; the EXR maps remain `mebake export`'s.)
 // The maps are the ones `mebake export --lightmap/--irradiance` writes (output/lightmap.h),
 // split into RGBA layers; pages are at most `max_atlas` texels per side (WebGL's usual
 // texture limit is 4096 to 16384).

@@ -73,7 +73,7 @@ try {
       null, { timeout: 120000, polling: 100 });
     const st = await page.evaluate(() => ({ ...window.mebakeView }));
     if (st.error) throw new Error(`page: ${st.error}\n${logs.join('\n')}`);
-    const info = { file: shot.file, lightMapMs: st.lightMapMs, mapsMs: st.mapsMs, firstFrameMs: st.firstFrameMs, readyMs: st.readyMs };
+    const info = { file: shot.file, moduleMs: st.moduleMs, lightMapMs: st.lightMapMs, mapsMs: st.mapsMs, firstFrameMs: st.firstFrameMs, readyMs: st.readyMs };
     if (Number(args.frames) > 0)
       info.frameMs = await page.evaluate((n) => window.mebakeView.measureFrameTime(n), Number(args.frames));
     await page.screenshot({ path: shot.file });

@@ -190,7 +190,7 @@ TEST_F(ViewE2E, ExportWebWritesThePage) {
     ASSERT_EQ(Mebake("-q export '" + bake + "' --web '" + out + "'"), 0);
     for (const char* f : {"index.html", "viewer.js", "shade.frag", "three/three.module.min.js",
                           "three/addons/loaders/GLTFLoader.js", "data/view.json",
-                          "data/mesh.000.glb", "data/lightmap.0.exr", "data/E.z.0.exr"})
+                          "data/mesh.000.glb", "data/lightmap.0.half", "data/E.z.0.half"})
         EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
     // Not over a directory with files in it unless forced.
     EXPECT_NE(Mebake("-q export '" + bake + "' --web '" + out + "' 2>/dev/null"), 0);
