@@ -36,16 +36,27 @@ async function fetchText(url) {
   return r.text();
 }
 
-// A map page: RGBA half floats, rows from the top, zlib-compressed (web_data.h), inflated
-// by the browser and uploaded as is. Row 0 at t = 0 puts glTF's top-left uv origin right.
+// A map page (web_data.h): inflated by the browser, then the byte deltas summed and the
+// byte planes (low, high byte of R, G, B, A) interleaved back into RGBA half floats, rows
+// from the top. Row 0 at t = 0 puts glTF's top-left uv origin right.
 async function loadHalfMap(url, page) {
   const r = await fetch(url);
   if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
-  const bytes = await new Response(r.body.pipeThrough(new DecompressionStream('deflate'))).arrayBuffer();
-  const n = page.width * page.height * 4;
-  if (bytes.byteLength !== 2 * n)
-    throw new Error(`${url}: ${bytes.byteLength} bytes, expected ${2 * n} (${page.width}x${page.height} RGBA half)`);
-  const t = new THREE.DataTexture(new Uint16Array(bytes), page.width, page.height,
+  const planes = new Uint8Array(
+    await new Response(r.body.pipeThrough(new DecompressionStream('deflate'))).arrayBuffer());
+  const texels = page.width * page.height;
+  if (planes.length !== 8 * texels)
+    throw new Error(`${url}: ${planes.length} bytes, expected ${8 * texels} (${page.width}x${page.height} RGBA half)`);
+  for (let i = 1; i < planes.length; ++i) planes[i] = (planes[i] + planes[i - 1]) & 255;
+  const bytes = new Uint8Array(8 * texels);
+  for (let c = 0; c < 4; ++c) {
+    const lo = planes.subarray(c * texels), hi = planes.subarray((4 + c) * texels);
+    for (let t = 0, o = 2 * c; t < texels; ++t, o += 8) {
+      bytes[o] = lo[t];
+      bytes[o + 1] = hi[t];
+    }
+  }
+  const t = new THREE.DataTexture(new Uint16Array(bytes.buffer), page.width, page.height,
                                   THREE.RGBAFormat, THREE.HalfFloatType);
   t.minFilter = THREE.LinearFilter;
   t.magFilter = THREE.LinearFilter;

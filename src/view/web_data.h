@@ -9,9 +9,11 @@
 //   lightmap.P.half       page P: R G B = B (W/m^2), A = 1 + the quadtree leaf level in
 //                         chart squares (1 in gutters, 0 on unused texels)
 //   E.x.P.half E.y.P.half E.z.P.half   page P: R G B = that component of E per colour, A = 1
-// A .half file is the page's texels, rows from the top, 4 IEEE half floats each (little
-// endian), zlib-compressed (RFC 1950): the browser inflates it natively and uploads it as
-// a half-float texture without decoding. (Three.js's EXRLoader, decoding in JavaScript,
+// A .half file is the page's texels (rows from the top, 4 IEEE half floats each) as byte
+// planes: byte k (0 low, 1 high) of channel c of texel t at (4 k + c) T + t for T texels;
+// each byte then replaced by its difference from the previous one (mod 256); the whole
+// zlib-compressed (RFC 1950). The browser inflates it natively and undoes the planes in one
+// pass, then uploads a half-float texture. (Three.js's EXRLoader, decoding in JavaScript,
 // took 7-9 s per 2048-texel page here; the EXR maps remain `mebake export`'s.)
 // The maps are the ones `mebake export --lightmap/--irradiance` writes (output/lightmap.h),
 // split into RGBA layers; pages are at most `max_atlas` texels per side (WebGL's usual
