@@ -64,8 +64,7 @@ void MarkLeafLevels(const output::BakeView& view, const output::Atlas& atlas, ui
 // channel R of every texel, then of G, B, A, then the high bytes likewise), each byte
 // replaced by its difference from the one before (mod 256), zlib-compressed. Smooth maps
 // then give runs of small numbers (OpenEXR's ZIP does the same), and the browser undoes it
-// with one pass after inflating natively (DecompressionStream): EXR decoding in JavaScript
-// took seconds per 2048-texel page on the 2-core VM.
+// with one pass after inflating natively (DecompressionStream).
 void WriteHalfMap(const std::string& path, std::span<const float> rgba) {
     const size_t texels = rgba.size() / 4;
     std::vector<uint8_t> planes(rgba.size() * 2);

@@ -13,8 +13,9 @@
 // planes: byte k (0 low, 1 high) of channel c of texel t at (4 k + c) T + t for T texels;
 // each byte then replaced by its difference from the previous one (mod 256); the whole
 // zlib-compressed (RFC 1950). The browser inflates it natively and undoes the planes in one
-// pass, then uploads a half-float texture. (Three.js's EXRLoader, decoding in JavaScript,
-// took 7-9 s per 2048-texel page here; the EXR maps remain `mebake export`'s.)
+// pass, then uploads a half-float texture. (Half-float EXR through three.js's EXRLoader,
+// decoded in JavaScript, delayed the first frame by seconds: bench/RESULTS.md. The EXR
+// maps remain `mebake export`'s.)
 // The maps are the ones `mebake export --lightmap/--irradiance` writes (output/lightmap.h),
 // split into RGBA layers; pages are at most `max_atlas` texels per side (WebGL's usual
 // texture limit is 4096 to 16384).
