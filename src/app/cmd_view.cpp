@@ -20,7 +20,9 @@ int RunView(const ViewCommand& c) {
     return 0;
 }
 
-int RunExportWeb(const std::string& dir, const std::string& out, bool force, bool no_meshopt) {
+int RunExportWeb(const std::string& dir, const std::string& out, bool force, bool no_meshopt,
+                 int threads) {
+    ThreadLimit limit(threads);
     view::WebDataOptions o;
     o.meshopt = !no_meshopt;
     view::ExportWeb(dir, out, force, o);

@@ -292,7 +292,7 @@ int main(int argc, char** argv) {
         }
         if (*exp_cmd) {
             if (!exp_web.empty()) {
-                mebake::app::RunExportWeb(exp.dir, exp_web, exp.force, exp_web_plain);
+                mebake::app::RunExportWeb(exp.dir, exp_web, exp.force, exp_web_plain, exp.threads);
                 if (exp.lightmap.empty() && exp.irradiance.empty() && exp.mesh.empty() &&
                     exp.vertex_colors.empty() && exp.stats.empty())
                     return 0;

@@ -17,6 +17,7 @@ struct ViewCommand {
 int RunView(const ViewCommand& c);
 
 // `mebake export DIR --web OUT`: the page and its data as static files.
-int RunExportWeb(const std::string& dir, const std::string& out, bool force, bool no_meshopt);
+int RunExportWeb(const std::string& dir, const std::string& out, bool force, bool no_meshopt,
+                 int threads);
 
 }  // namespace mebake::app

@@ -192,6 +192,11 @@ TEST_F(ViewE2E, ExportWebWritesThePage) {
                           "three/addons/loaders/GLTFLoader.js", "data/view.json",
                           "data/mesh.000.glb", "data/lightmap.0.half", "data/E.z.0.half"})
         EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+    // The same bytes for any thread count.
+    const std::string one = Path("site1");
+    ASSERT_EQ(Mebake("-q export '" + bake + "' --web '" + one + "' --threads 1"), 0);
+    EXPECT_EQ(e2e::Shell("diff -r '" + out + "' '" + one + "' >/dev/null"), 0)
+        << "export --web differs between --threads 1 and all threads";
     // Not over a directory with files in it unless forced.
     EXPECT_NE(Mebake("-q export '" + bake + "' --web '" + out + "' 2>/dev/null"), 0);
     EXPECT_EQ(Mebake("-q export '" + bake + "' --web '" + out + "' --force"), 0);
