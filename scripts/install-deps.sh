@@ -10,14 +10,20 @@ PKGS=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-14 libclang-rt-14-dev
   time openexr
+  libcpp-httplib-dev libmeshoptimizer-dev chromium
 )
 
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# The viewer embeds three.js from npm at build time and its test drives headless Chromium
+# with node. Any node >= 18 with npm will do (Debian's, or one installed otherwise: adding
+# Debian's npm beside a node that bundles its own would conflict), so check the commands.
+command -v node >/dev/null 2>&1 || missing+=(nodejs)
+command -v npm >/dev/null 2>&1 || missing+=(npm)
 if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#PKGS[@]} packages present"
+  echo "install-deps: all ${#PKGS[@]} packages (and node, npm) present"
   exit 0
 fi
 echo "install-deps: installing ${missing[*]}"

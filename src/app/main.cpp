@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/export_commands.h"
 #include "app/reference_commands.h"
+#include "app/view_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "io/mesh_format.h"
@@ -208,6 +209,22 @@ int main(int argc, char** argv) {
     exp_cmd->add_flag("--unlit", exp.unlit, ".glb: KHR_materials_unlit base colour instead of an emissive light map");
     exp_cmd->add_option("--threads", exp.threads, "Worker threads (0: all cores)")->capture_default_str();
     exp_cmd->add_flag("-f,--force", exp.force, "Overwrite existing output files");
+    std::string exp_web;
+    bool exp_web_plain = false;
+    exp_cmd->add_option("--web", exp_web, "Directory for the browser viewer as static files (docs/viewer.md)");
+    exp_cmd->add_flag("--no-meshopt", exp_web_plain, "--web: plain glTF buffers, no EXT_meshopt_compression");
+
+    // view  (#include "app/view_commands.h")
+    mebake::app::ViewCommand vw;
+    auto* vw_cmd = app.add_subcommand(
+        "view", "Serve a browser viewer of a solved bake on localhost: light map, vector\n"
+                "irradiance and the seed's glossy display on the GPU (docs/viewer.md).");
+    vw_cmd->add_option("dir", vw.dir, "Solved bake directory, or the output directory of `mebake bake`")->required();
+    vw_cmd->add_option("--port", vw.port, "TCP port on 127.0.0.1 (0: any free port)")->capture_default_str();
+    vw_cmd->add_option("--chunk", vw.chunk_triangles, "Triangles per streamed mesh chunk")->capture_default_str();
+    vw_cmd->add_flag("--no-meshopt", vw.no_meshopt, "Plain glTF buffers, no EXT_meshopt_compression");
+    vw_cmd->add_flag("--rewrite", vw.rewrite, "Rewrite the viewer data (DIR/web) even when current");
+    vw_cmd->add_option("--threads", vw.threads, "Worker threads (0: all cores)")->capture_default_str();
 
     // render
     mebake::app::RenderCommand ren;
@@ -273,6 +290,8 @@ int main(int argc, char** argv) {
                     "  mebake compare view.exr ref.exr --diff diff.png");
     exp_cmd->footer("Example:\n  mebake export scene.mebake --lightmap lm.exr --mesh lit.glb "
                     "--vertex-colors lit.ply");
+    vw_cmd->footer("Example:\n  mebake view out/rock    (then open http://127.0.0.1:8080/)\n"
+                   "  http://127.0.0.1:8080/?eye=0,1,3.4&target=0,1,0&fov=40&mode=glossy");
     ren_cmd->footer("Example:\n  mebake render scene.mebake --eye 0,1,3 --target 0,0,0 -o view.png "
                     "--glossy");
     bk_cmd->footer("Example:\n  mebake bake scan.ply -o out/    (rerun the same command to resume)\n"
@@ -300,7 +319,16 @@ int main(int argc, char** argv) {
             bk.format = ToFormat(bk_format);
             return mebake::app::RunBake(bk);
         }
-        if (*exp_cmd) return mebake::app::RunExport(exp);
+        if (*exp_cmd) {
+            if (!exp_web.empty()) {
+                mebake::app::RunExportWeb(exp.dir, exp_web, exp.force, exp_web_plain, exp.threads);
+                if (exp.lightmap.empty() && exp.irradiance.empty() && exp.mesh.empty() &&
+                    exp.vertex_colors.empty() && exp.stats.empty())
+                    return 0;
+            }
+            return mebake::app::RunExport(exp);
+        }
+        if (*vw_cmd) return mebake::app::RunView(vw);
         if (*ref_cmd) {
             if (ref_target.size() == 3)
                 ref.look_at = ref_target;
