@@ -76,8 +76,7 @@ public:
     // as usual. The multi-emitter pass (extremal_boundary.h) supplies it.
     void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
                   size_t probes = 0, ProbeCache* cache = nullptr,
-                  std::span<const ProbeKey> keys = {},
-                  std::span<const uint8_t> known = {}) const;
+                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {}) const;
     bool has_lights() const { return !lights_.empty(); }
     size_t light_count() const { return lights_.size(); }
     // Per point, light `light` as seen with its classification rays only (no penumbra

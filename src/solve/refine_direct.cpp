@@ -284,7 +284,8 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
         ++sf.marked;
         float scale = fit(sf.known, true, true);
         scale = std::max({scale, MaxAbs(sampler.ctrl_vals), floor});
-        const float err = ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        const float err =
+            ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
         return err > tol * scale ? err : 0;
     }
     ++sf.washed;
