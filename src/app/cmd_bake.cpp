@@ -64,6 +64,7 @@ int RunSolve(const SolveCommand& c) {
     opt.threads = c.threads;
     opt.memory = ParseMemory(c.memory);
     opt.radiosity = c.unknown == "radiosity";
+    opt.multi_emitter = c.multi_emitter;
     opt.stats_file = c.stats_file;
     opt.checkpoint_interval = c.checkpoint_interval;
     opt.resume = c.resume;

@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
     sol_cmd->add_option("--memory", sol.memory, "Memory budget (e.g. 512M, 2G)")->capture_default_str();
     sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity")->capture_default_str()
         ->check(CLI::IsMember({"irradiance", "radiosity"}));
+    sol_cmd->add_option("--multi-emitter", sol.multi_emitter,
+                        "Direct light of several polygon lights: full (every light traced everywhere) "
+                        "or simplify (extremal boundaries + L2 simplification, seed 002); default: "
+                        "the scene file's solver.multi_emitter, else full")
+        ->check(CLI::IsMember({"full", "simplify"}));
     sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
     sol_cmd->add_option("--checkpoint-interval", sol.checkpoint_interval,
                         "Seconds between checkpoints (solve/checkpoint.bin; 0: every batch, "

@@ -89,6 +89,16 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
+bool DirectLight::Faces(const Light& l, const ReceiverPoint& rp) {
+    // E does not involve the receiver's normal (that is what keeps it smooth on
+    // noisy scans): what lies below the surface is removed by visibility alone.
+    double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
+    bool above = Dot(rp.horizon, rp.horizon) == 0;
+    for (const auto& v : l.vertices)
+        above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
+    return (side > 0 || (l.two_sided && side < 0)) && above;
+}
+
 // One light at the points `which`. prior_cls / prior_grid (may be null): visibility states
 // (2 visible, 3 hidden, 0 unknown) of the classification targets / grid vertices taken as
 // known for every point, so no ray is spent on them. cls_out / grid_out (may be null)
@@ -107,13 +117,7 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     std::vector<std::pair<size_t, size_t>> asked;
     for (size_t q = 0; q < which.size(); ++q) {
         const auto& rp = points[which[q]];
-        // E does not involve the receiver's normal (that is what keeps it smooth on
-        // noisy scans): what lies below the surface is removed by visibility alone.
-        double side = Dot(Vec3d(rp.position) - l.vertices[0], l.normal);
-        bool above = Dot(rp.horizon, rp.horizon) == 0;
-        for (const auto& v : l.vertices)
-            above |= Dot(v - Vec3d(rp.position), Vec3d(rp.horizon)) > 0;
-        faces[q] = (side > 0 || (l.two_sided && side < 0)) && above;
+        faces[q] = Faces(l, rp);
         if (!faces[q])
             continue;
         const Vec3f o = rp.vis_point + rp.normal * offset_;
@@ -192,13 +196,16 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
 }
 
 void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts,
-                           size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys) const {
+                           size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
+                           std::span<const uint8_t> known) const {
     CHECK_EQ(out.size(), points.size() * 9);
+    if (!known.empty())
+        CHECK_EQ(known.size(), lights_.size());
     std::fill(out.begin(), out.end(), 0.f);
     if (cache)
         CHECK_EQ(keys.size(), probes);
     if (parts & kLights)
-        AddLights(points, out, probes, cache, keys);
+        AddLights(points, out, probes, cache, keys, known);
     if (sky_.type != Sky::Type::None && (parts & kSky))
         AddSky(points, out);
 }
@@ -207,8 +214,8 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
 // patch), the probes are evaluated first, or found in the cache; where all of them agree
 // on a light vertex's visibility, the other points take it without a ray.
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
-                            size_t probes, ProbeCache* cache,
-                            std::span<const ProbeKey> keys) const {
+                            size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
+                            std::span<const uint8_t> known) const {
     const bool coherent = probes > 0 && probes < points.size();
     // Probes found in the cache, and records for the others (filled light by light).
     std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
@@ -227,6 +234,31 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
     std::vector<size_t> others(points.size() - (coherent ? probes : 0));
     std::iota(others.begin(), others.end(), coherent ? probes : 0);
     for (const auto& l : lights_) {
+        const size_t li = size_t(&l - lights_.data());
+        if (!known.empty() && known[li] != 0) {
+            // Known visible or hidden: every point (probes too) without a ray; fresh probe
+            // records get this light's E and uniform states so the record layout holds.
+            const size_t nk = l.classify.size();
+            const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+            const std::vector<uint8_t> prior(nk + nv, known[li]);
+            std::vector<size_t> all(points.size());
+            std::iota(all.begin(), all.end(), size_t(0));
+            probe_e.assign(out.size(), 0.f);
+            EvaluateLight(l, points, all, prior.data(), prior.data() + nk, probe_e, nullptr,
+                          nullptr);
+            for (size_t k = 0; k < out.size(); ++k)
+                out[k] += probe_e[k];
+            if (coherent) {
+                for (size_t q = 0; q < probes; ++q) {
+                    if (found[q])
+                        continue;
+                    fresh[q].e.insert(fresh[q].e.end(), &probe_e[q * 9], &probe_e[q * 9] + 9);
+                    fresh[q].states.insert(fresh[q].states.end(), prior.begin(), prior.end());
+                }
+                state_at += nk + nv;
+            }
+            continue;
+        }
         if (!coherent) {
             EvaluateLight(l, points, others, nullptr, nullptr, out, nullptr, nullptr);
             continue;

@@ -33,12 +33,13 @@ struct ReceiverPoint {
 // and children compute the same values).
 struct ProbeKey {
     uint32_t u = 0, v = 0, level = 0;
+    uint32_t known = 0;  // the lights taken as known (Evaluate's `known`), as a code
     bool operator==(const ProbeKey&) const = default;
 };
 struct ProbeKeyHash {
     size_t operator()(const ProbeKey& k) const {
         return size_t((uint64_t(k.u) * 0x9E3779B97F4A7C15ull) ^
-                      (uint64_t(k.v) * 0xC2B2AE3D27D4EB4Full) ^ k.level);
+                      (uint64_t(k.v) * 0xC2B2AE3D27D4EB4Full) ^ k.level ^ (size_t(k.known) << 8));
     }
 };
 
@@ -70,10 +71,20 @@ public:
     // it; where all probes agree on the visibility of a light's vertex (or sub-cell corner),
     // the other points take it without tracing (reuse of visibility across a patch).
     // With a cache and one key per probe, probes found there cost no ray (same result).
+    // known (empty, or one state per light): 2 = the light is taken as fully visible at
+    // every point (closed form, no ray), 3 = as hidden (no contribution, no ray), 0 = traced
+    // as usual. The multi-emitter pass (extremal_boundary.h) supplies it.
     void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
                   size_t probes = 0, ProbeCache* cache = nullptr,
-                  std::span<const ProbeKey> keys = {}) const;
+                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {}) const;
     bool has_lights() const { return !lights_.empty(); }
+    size_t light_count() const { return lights_.size(); }
+    // Per point, light `light` as seen with its classification rays only (no penumbra
+    // rays): kPointAway (the light cannot reach it), kPointLit, kPointUmbra, kPointPenumbra.
+    // extremal_boundary.cpp.
+    enum PointClass : uint8_t { kPointAway, kPointLit, kPointUmbra, kPointPenumbra };
+    void ClassifyPoints(size_t light, std::span<const ReceiverPoint> points,
+                        std::vector<uint8_t>* kind) const;
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.
@@ -101,7 +112,10 @@ private:
                        const uint8_t* prior_grid, std::span<float> out,
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
     void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
-                   ProbeCache* cache, std::span<const ProbeKey> keys) const;
+                   ProbeCache* cache, std::span<const ProbeKey> keys,
+                   std::span<const uint8_t> known) const;
+    // Whether light l can reach the point at all (its side, above the point's horizon).
+    static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,

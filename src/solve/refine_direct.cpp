@@ -7,6 +7,8 @@
 #include "core/check.h"
 #include "core/log.h"
 #include "solve/direct.h"
+#include "solve/extremal_boundary.h"
+#include "solve/multi_emitter.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
 #include "solve/solver.h"
@@ -57,11 +59,16 @@ public:
         SamplePoints(node, gl, n_gauss, probes);
         e9_all_.assign(all_pts_.size() * 9, 0.f);
         if (direct_.has_lights())
-            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_, keys_);
+            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_, keys_,
+                             known);
         ToGaussAndControl(n_gauss, n_ctrl, control);
     }
 
+    int order() const { return ng_ - 1; }
     std::vector<float> gauss_vals, ctrl_vals;
+    // Per light, as DirectLight::Evaluate's `known` (empty: every light traced).
+    std::vector<uint8_t> known;
+    bool use_probes = true;  // false: no shared visibility and no cache (masked evaluations)
 
 private:
     // Chart coordinates of point idx: Gauss points 0..n_gauss-1, then the control grid.
@@ -80,7 +87,8 @@ private:
     // the Gauss grid's). Returns the number of probes.
     size_t OrderPoints(const QuadNode& node, bool control, int n_gauss, int n_ctrl) {
         slot_.clear();
-        const bool coherent = int(node.level) + kCoherentLevels >= max_level_ && ng_ > 1;
+        const bool coherent =
+            use_probes && int(node.level) + kCoherentLevels >= max_level_ && ng_ > 1;
         if (coherent) {
             if (control) {
                 for (int c : {0, gc_ - 1, gc_ * (gc_ - 1), gc_ * gc_ - 1})
@@ -110,9 +118,10 @@ private:
             all_albedo_[k] = solver_.Albedo(smp.material, smp.color);
         }
         keys_.resize(probes);
+        const uint32_t code = KnownCode(known);
         for (size_t k = 0; k < probes; ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
-            keys_[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl)};
+            keys_[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), code};
         }
     }
 
@@ -156,6 +165,17 @@ private:
     std::vector<float> e9_all_, e9_, ce9_;
 };
 
+// --multi-emitter simplify: the lights' extremal boundaries on this chart, a sampler with
+// more Gauss points for accurate values (closed form only, no rays), and scratch states.
+struct Solver::SimplifiedFit {
+    const ExtremalBoundaries& eb;
+    DirectSampler& fine;
+    uint32_t chart;
+    std::vector<uint8_t> known{}, masked{}, unoccluded{};
+    std::vector<float> accurate{};
+    size_t closed = 0, washed = 0, marked = 0;  // nodes tested each way
+};
+
 void Solver::RefineDirect(uint32_t chart) {
     const SolveChart& sc = charts_[chart];
     const GeometryPin pin = sc.geometry.Pin();
@@ -181,11 +201,98 @@ void Solver::RefineDirect(uint32_t chart) {
                                           size_levels);
 
     DirectSampler sampler(*this, sc, order, max_level, direct);
-    FitDirectLights(chart, sampler, min_level, max_level);
+    if (opt_.settings.multi_emitter_simplify && direct.light_count() >= 2) {
+        // Extremal boundaries first (a few rays per sample), then the fit with the lights
+        // known lit or hidden taken in closed form (multi_emitter.h). With one light there
+        // is nothing to wash out and the extra pass cost 23 % on the Cornell box: full.
+        const int finest = sc.geometry.finest_level();
+        const ExtremalBoundaries eb(
+            direct,
+            [&](float u, float v) {
+                auto smp = SampleBilinear(sc.geometry, finest, u, v);
+                return ReceiverPoint{smp.position, smp.normal, VisPoint(sc, finest, u, v, smp),
+                                     HorizonNormal(sc, u, v)};
+            },
+            std::min(max_level, min_level + 1), max_level);
+        DirectSampler fine(*this, sc, std::min(order + 2, kMaxGauss - 1), max_level, direct);
+        fine.use_probes = false;
+        SimplifiedFit simplified{eb, fine, chart};
+        FitDirectLights(chart, sampler, min_level, max_level, &simplified);
+        spdlog::debug("chart {}: multi-emitter: {} boundary samples; nodes tested closed-form {}, "
+                      "washed out {}, marked {}",
+                      chart, eb.sample_points(), simplified.closed, simplified.washed,
+                      simplified.marked);
+    } else {
+        FitDirectLights(chart, sampler, min_level, max_level, nullptr);
+    }
     spdlog::debug("chart {}: direct light refined to {} nodes (depth cap {})", chart,
                   fields_[chart].node_count(), max_level);
     if (direct.has_sky())
         GatherSky(chart, direct, std::min(max_level, std::max(0, opt_.sky_level + size_levels)));
+}
+
+// One node under --multi-emitter simplify (seed 002, section 5): its fit into coeffs, and
+// the error to refine it by (0: keep it). Lights whose extremal-boundary class is lit or
+// umbra cost no ray. Where every light is known (light-light), the fit is tested against
+// the closed form in L2 by a finer Gauss rule. Where some lights are in penumbra, the
+// unoccluded closed form of those lights bounds what their shadows can change: under half
+// the tolerance of the known lights' light, they are washed out (light-penumbra: traced at
+// the Gauss points only, the medium-quality fit, and the known part tested in L2 plus that
+// bound); otherwise the node is marked and tested as in full, with the control grid.
+float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
+                             SimplifiedFit& sf, std::vector<float>& coeffs) {
+    const ChartField& field = fields_[sf.chart];
+    const int order = field.order(), blocks = field.blocks(), ng = order + 1, gc = order + 2;
+    const int nf = sf.fine.order() + 1;
+    const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
+    sf.eb.Known(node, &sf.known);
+    auto fit = [&](const std::vector<uint8_t>& known, bool ctrl, bool probes) {
+        sampler.known = known;
+        sampler.use_probes = probes;
+        sampler.Evaluate(node, ctrl);
+        sampler.use_probes = true;
+        ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+        return MaxAbs(sampler.gauss_vals);
+    };
+    auto accurate = [&](const std::vector<uint8_t>& known) {
+        sf.fine.known = known;
+        sf.fine.Evaluate(node, false);
+        return sf.fine.gauss_vals;
+    };
+    if (!control) {
+        fit(sf.known, false, true);
+        return 0;
+    }
+    if (std::find(sf.known.begin(), sf.known.end(), uint8_t(0)) == sf.known.end()) {
+        ++sf.closed;
+        const float scale = fit(sf.known, false, true);
+        sf.accurate = accurate(sf.known);
+        const float err = GaussL2Error(order, nf, coeffs.data(), blocks, sf.accurate.data());
+        return err > tol * std::max({scale, MaxAbs(sf.accurate), floor}) ? err : 0;
+    }
+    sf.masked = sf.known;      // lights in penumbra hidden: the known part
+    sf.unoccluded = sf.known;  // only the lights in penumbra, unoccluded
+    for (size_t l = 0; l < sf.known.size(); ++l) {
+        sf.masked[l] = sf.known[l] == 0 ? 3 : sf.known[l];
+        sf.unoccluded[l] = sf.known[l] == 0 ? 2 : 3;
+    }
+    sf.accurate = accurate(sf.masked);
+    const float base = std::max(MaxAbs(sf.accurate), floor);
+    const std::vector<float> unocc = accurate(sf.unoccluded);
+    const float bound = GaussL2Norm(nf, blocks, unocc.data());
+    if (bound > 0.5f * tol * base) {
+        ++sf.marked;
+        float scale = fit(sf.known, true, true);
+        scale = std::max({scale, MaxAbs(sampler.ctrl_vals), floor});
+        const float err =
+            ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        return err > tol * scale ? err : 0;
+    }
+    ++sf.washed;
+    fit(sf.masked, false, false);
+    const float err = GaussL2Error(order, nf, coeffs.data(), blocks, sf.accurate.data()) + bound;
+    const float scale = std::max(fit(sf.known, false, true), base);
+    return err > tol * scale ? err : 0;
 }
 
 // Every node gets its fit when it is made; nodes whose fit misses the control points wait
@@ -194,7 +301,8 @@ void Solver::RefineDirect(uint32_t chart) {
 // refined and every node still holds its own fit: the budget degrades the whole chart
 // evenly instead of leaving the last quadrants of a depth-first walk at the root's
 // resolution.
-void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level) {
+void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level,
+                             SimplifiedFit* simplified) {
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks();
     const int ng = order + 1, gc = order + 2;
@@ -215,6 +323,14 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
             return;
         }
         const bool control = int(node.level) < max_level;
+        if (simplified) {
+            const float err = SimplifiedNode(node, control, sampler, *simplified, coeffs);
+            std::copy(coeffs.begin(), coeffs.end(), field.value(n));
+            std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
+            if (err > 0)
+                queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
+            return;
+        }
         sampler.Evaluate(node, control);
         float scale = MaxAbs(sampler.gauss_vals);
         ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());

@@ -200,6 +200,10 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
             o.sky_directions = s.value("sky_directions", o.sky_directions);
             o.light_samples = s.value("light_samples", o.light_samples);
             if (o.order < 0 || o.order > 3) InputError({scene_file}, "solver.order must be 0..3");
+            const std::string multi = s.value("multi_emitter", std::string("full"));
+            if (multi != "full" && multi != "simplify")
+                InputError({scene_file}, "solver.multi_emitter '{}': expected full or simplify", multi);
+            o.multi_emitter_simplify = multi == "simplify";
         }
     } catch (const json::exception& e) {
         InputError({scene_file}, "{}", e.what());

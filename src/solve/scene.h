@@ -46,6 +46,9 @@ struct SolverSettings {
     int sky_directions = 128;     // visibility directions per receiver point for the sky
     int light_samples = 64;       // visibility samples per receiver point in penumbrae
     bool radiosity = false;       // solve for B instead of E (for comparison, seed Table 1)
+    // Direct light from several polygon lights: false = every light traced at every point
+    // (full), true = extremal boundaries and the L2 simplification of seed 002 (simplify).
+    bool multi_emitter_simplify = false;
 };
 
 struct Scene {

@@ -101,7 +101,8 @@ std::string SettingsText(const Scene& scene, const std::string& scene_file) {
         "checkpoint {} order {} tolerance {:.17g} bounces {} stop {:.17g} time {:.17g} sky {} "
         "light {} radiosity {} scene {}",
         kCheckpointVersion, s.order, s.tolerance, s.max_bounces, s.stop_fraction, s.time_limit,
-        s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash);
+        s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash) +
+        (s.multi_emitter_simplify ? " multi-emitter simplify" : "");
 }
 
 using Clock = std::chrono::steady_clock;
@@ -123,6 +124,8 @@ Scene PrepareScene(const stream::Manifest& m, const SolveJobOptions& opt) {
     if (opt.time_limit > 0)
         scene.solver.time_limit = opt.time_limit;
     scene.solver.radiosity = opt.radiosity;
+    if (!opt.multi_emitter.empty())
+        scene.solver.multi_emitter_simplify = opt.multi_emitter == "simplify";
     spdlog::info("scene: {}", scene.description);
     return scene;
 }

@@ -23,6 +23,7 @@ struct SolveJobOptions {
     int threads = 0;
     uint64_t memory = uint64_t(1) << 30;
     bool radiosity = false;
+    std::string multi_emitter;  // "full" or "simplify"; empty: the scene file's
     std::string stats_file;           // extra copy of the statistics (JSON)
     double checkpoint_interval = 30;  // seconds; 0: at every batch boundary; < 0: only on signals
     bool resume = false;              // continue from a checkpoint / keep a matching solution

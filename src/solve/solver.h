@@ -108,7 +108,11 @@ private:
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
     void CountNodes();
     void RefineDirect(uint32_t chart);
-    void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level);
+    struct SimplifiedFit;  // refine_direct.cpp (--multi-emitter simplify)
+    void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level,
+                         SimplifiedFit* simplified);
+    float SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
+                         SimplifiedFit& sf, std::vector<float>& coeffs);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
