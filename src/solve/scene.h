@@ -46,6 +46,7 @@ struct SolverSettings {
     int sky_directions = 128;     // visibility directions per receiver point for the sky
     int light_samples = 64;       // visibility samples per receiver point in penumbrae
     bool radiosity = false;       // solve for B instead of E (for comparison, seed Table 1)
+    bool cluster_links = true;    // far receivers through cluster links (cluster_links.cpp)
 };
 
 struct Scene {
