@@ -17,9 +17,11 @@ enum class RayKind : int {
     kSky,           // sky directions
     kLink,          // indirect light: receiver point to emitter texel
     kOther,
+    kCluster,       // indirect light: visibility samples of a cluster link (cluster_links.cpp)
     kCount
 };
-inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky", "link", "other"};
+inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky",
+                                                "link",     "other",    "cluster"};
 
 struct SegmentBatch {
     std::vector<Segment> segments;

@@ -49,6 +49,7 @@ struct SolverSettings {
     // Direct light from several polygon lights: false = every light traced at every point
     // (full), true = extremal boundaries and the L2 simplification of seed 002 (simplify).
     bool multi_emitter_simplify = false;
+    bool cluster_links = true;    // far receivers through cluster links (cluster_links.cpp)
 };
 
 struct Scene {

@@ -341,6 +341,8 @@ nlohmann::json StatsJson(const SolveJobOptions& opt, const SolveOptions& so, siz
     j["rays_per_second"] = st.seconds_direct + st.seconds_indirect > 0
                                ? double(st.rays) / (st.seconds_direct + st.seconds_indirect)
                                : 0.0;
+    j["cluster_links"] = st.cluster_links;
+    j["opened_links"] = st.opened_links;
     j["nodes_per_level"] = st.nodes_per_level;
     j["leaves"] = st.leaves;
     j["field_bytes"] = st.field_bytes;
@@ -402,6 +404,9 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     so.scene_size = float(diag);
     so.ray_offset = float(diag * 2e-5 + m.proxy_deviation);
     so.shoot_emission = shoot_emission;
+    so.cluster_links = scene.solver.cluster_links;
+    if (!scene.solver.cluster_links)
+        so.link_probes = 0;  // the chart-by-chart solve of before, for comparisons
     spdlog::info("solving {} charts, order M{}, {}, tolerance {}", charts.size(), so.settings.order,
                  so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
 

@@ -32,21 +32,6 @@ float Luminance(const Vec3f& c) {
 
 }  // namespace
 
-struct Solver::Emitter {
-    struct Texel {
-        Vec3f pos, nrm, vis;
-        float area = 0;
-        float radius = 0;
-        Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
-        float db_max = 0;  // largest luminance of db within the texel
-    };
-    uint32_t chart = 0;
-    std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
-    Vec3f center;
-    float radius = 0;
-    double scale = 1;
-};
-
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
                const VisibilityScene& vis, SolveOptions opt)
     : scene_(scene), charts_(charts), vis_(vis), opt_(std::move(opt)) {
@@ -249,13 +234,17 @@ public:
           finest_(sc_.geometry.finest_level()),
           eps_(solver.RayOffset(receiver)),
           coeffs_(size_t(field_.stride())) {
-        // A constant (M0) receiver node holds one E for its whole area, while the E of a
-        // source turns and falls off across it by ~ its size / distance (higher orders hold
-        // the linear part). M0 gathers at nodes 4x smaller against their distance: at tau
-        // 0.5 the furnace lost 0.36% per bounce, 3% at albedo 0.9.
-        receiver_tau_ = order_ == 0 ? 0.25 * s_.opt_.receiver_tau : s_.opt_.receiver_tau;
+        receiver_tau_ = solver.ReceiverTau();
         // Links whose irradiance bound is below this are evaluated where they stand.
         negligible_ = 1e-3 * s_.opt_.settings.tolerance * s_.reference_;
+    }
+
+    // A cluster link's share for this chart: the link (root node, whole emitter) as Shoot()
+    // would evaluate it, at the same emitter samples, with the cluster's visibility `vis`
+    // in place of one ray per pair.
+    void ShootCluster(const Emitter& em, float vis) {
+        const int top = int(em.levels.size()) - 1;
+        EvaluateLink(0, em, Link{0, 0, 0, 0}, std::min(top, 1), vis);
     }
 
     // A pair (receiver node, emitter region) is evaluated when both are small against
@@ -331,20 +320,25 @@ private:
     }
 
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
-    // Gauss points; adds the projection to the node's pending set.
-    void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls) {
-        s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+    // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
+    // pair; otherwise every pair is weighted by vis (a cluster link's estimate).
+    void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
+        if (n != pts_node_) {  // the same node's points serve every emitter
+            s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+            pts_node_ = n;
+        }
         const auto& texels = em.levels[size_t(ls)];
-        CollectPairs(texels, lk, ls, em.scale);
+        CollectPairs(texels, lk, ls, em.scale, vis < 0);
         if (pairs_.empty())
             return;
-        batch_.Trace(s_.vis_, RayKind::kLink);
+        if (vis < 0)
+            TraceLink();
         e9_.assign(pts_.size() * 9, 0.f);
         for (size_t q = 0; q < pairs_.size(); ++q) {
-            if (batch_.occluded[q])
+            if (vis < 0 && batch_.occluded[q])
                 continue;
             const Pair& pr = pairs_[q];
-            const Vec3f& db = texels[pr.texel].db;
+            const Vec3f db = vis < 0 ? texels[pr.texel].db : texels[pr.texel].db * vis;
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k)
                     e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
@@ -356,10 +350,32 @@ private:
             pend[k] += coeffs_[size_t(k)];
     }
 
+    // Visibility of every pair of the link. With more pairs than twice `link_probes`, a
+    // stratified subset is traced first: when those rays agree (the link wholly visible or
+    // wholly hidden, the usual case for a link small against its distance), their answer
+    // stands for every pair; only partial links trace every pair.
+    void TraceLink() {
+        const size_t n = pairs_.size(), probes = size_t(std::max(0, s_.opt_.link_probes));
+        if (probes == 0 || n <= 2 * probes) {
+            batch_.Trace(s_.vis_, RayKind::kLink);
+            return;
+        }
+        probe_.Clear();
+        for (size_t k = 0; k < probes; ++k)
+            probe_.segments.push_back(batch_.segments[(2 * k + 1) * n / (2 * probes)]);
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
+        if (hidden == 0 || hidden == probes) {
+            batch_.occluded.assign(n, hidden == 0 ? 0 : 1);
+            return;
+        }
+        batch_.Trace(s_.vis_, RayKind::kLink);
+    }
+
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h) and its visibility segment.
     void CollectPairs(const std::vector<Emitter::Texel>& texels, const Link& lk, int ls,
-                      double emitter_scale) {
+                      double emitter_scale, bool rays) {
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
         pairs_.clear();
@@ -378,7 +394,8 @@ private:
                                        &contrib))
                         continue;
                     pairs_.push_back({p, k, Vec3f(contrib)});
-                    batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                    if (rays)
+                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
                 }
             }
         }
@@ -391,17 +408,34 @@ private:
     const int order_, ng_, finest_;
     const float eps_;
     double receiver_tau_ = 0, negligible_ = 0;
+    size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
     std::vector<ReceiverPoint> pts_;
     std::vector<Vec3f> albedo_;
     std::vector<Pair> pairs_;
     std::vector<float> e9_, vals_, coeffs_;
-    SegmentBatch batch_;
+    SegmentBatch batch_, probe_;
 };
 
-void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters) {
+double Solver::ReceiverTau() const {
+    // A constant (M0) receiver node holds one E for its whole area, while the E of a
+    // source turns and falls off across it by ~ its size / distance (higher orders hold
+    // the linear part). M0 gathers at nodes 4x smaller against their distance: at tau
+    // 0.5 the furnace lost 0.36% per bounce, 3% at albedo 0.9.
+    return opt_.settings.order == 0 ? 0.25 * opt_.receiver_tau : opt_.receiver_tau;
+}
+
+// links: empty (every pair refined chart by chart) or, per emitter, per chart, what
+// LinkClusters() decided. Emitters are taken in their fixed order.
+void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
+                    const std::vector<std::vector<float>>& links) {
     Gatherer gatherer(*this, receiver);
-    for (const Emitter& em : emitters)
-        gatherer.Shoot(em);
+    for (size_t k = 0; k < emitters.size(); ++k) {
+        const float link = links.empty() ? kOpenLink : links[k][receiver];
+        if (link == kOpenLink)
+            gatherer.Shoot(emitters[k]);
+        else if (link > 0)
+            gatherer.ShootCluster(emitters[k], link);
+    }
     fields_[receiver].PushPending();
 }
 
@@ -466,9 +500,23 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
         ParallelFor(0, int64_t(g1 - g0), [&](int64_t k) {
             BuildEmitter(shooters[g0 + size_t(k)], first, &emitters[size_t(k)]);
         });
+        // Cluster links per shooter (each its own output), then every receiver gathers.
+        std::vector<std::vector<float>> links;
+        if (opt_.cluster_links) {
+            links.resize(emitters.size());
+            std::vector<uint64_t> accepted(emitters.size()), opened(emitters.size());
+            ParallelFor(0, int64_t(emitters.size()), [&](int64_t k) {
+                LinkClusters(emitters[size_t(k)], &links[size_t(k)], &accepted[size_t(k)],
+                             &opened[size_t(k)]);
+            });
+            for (size_t k = 0; k < emitters.size(); ++k) {
+                stats_.cluster_links += accepted[k];
+                stats_.opened_links += opened[k];
+            }
+        }
         for (size_t k = g0; k < g1; ++k)
             fields_[shooters[k]].ClearUnshot();
-        ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters); });
+        ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters, links); });
     }
     return shooters.size();
 }
@@ -518,6 +566,8 @@ void Solver::Run(const Progress& progress) {
 
     // Southwell batches.
     const auto t1 = Clock::now();
+    if (opt_.cluster_links && clusters_.empty())
+        BuildClusters();
     std::vector<double> power(nc);
     bool first = next_batch_ == 0;
     for (int batch = next_batch_;; ++batch) {

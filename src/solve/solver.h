@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "solve/cluster_tree.h"
 #include "solve/direct.h"
 #include "solve/field.h"
 #include "solve/scene.h"
@@ -29,6 +30,7 @@
 namespace mebake::solve {
 
 class VisibilityScene;
+struct SegmentBatch;
 
 struct SolveChart {
     GeometryPyramid geometry;  // hold geometry.Pin() while reading it
@@ -50,6 +52,18 @@ struct SolveOptions {
     size_t emitter_group = 64;      // shooters built and gathered together (memory)
     bool shoot_emission = true;     // emissive materials shoot their emission in batch 0
                                     // (false when they are handled as polygon lights)
+    // Cluster links (cluster_links.cpp): a shooter reaches a far group of receiver charts
+    // through one link whose visibility is estimated from max(cluster_rays,
+    // cluster_rays_per_chart x its charts) rays; partial visibility is refined unless the
+    // link's irradiance bound is below cluster_tolerance x tolerance x the reference.
+    bool cluster_links = true;
+    int cluster_rays = 16;
+    int cluster_rays_per_chart = 2;
+    double cluster_tau = 1;         // a cluster links when its radius / distance <= this
+    double cluster_tolerance = 0.01;
+    // Chart-level links with more pairs than twice this trace this many stratified pairs
+    // first and trace the rest only when those disagree (0: one ray per pair always).
+    int link_probes = 8;
 };
 
 struct SolveStats {
@@ -60,6 +74,8 @@ struct SolveStats {
     double seconds_direct = 0, seconds_indirect = 0;
     double emitted_power = 0;       // first-shot power (direct light reflected + emission)
     double unshot_power = 0;        // left when it stopped
+    uint64_t cluster_links = 0;     // (shooter, cluster) links accepted
+    uint64_t opened_links = 0;      // (shooter, chart) pairs left to chart-level links
     std::vector<uint64_t> nodes_per_level;
     uint64_t leaves = 0;
     size_t field_bytes = 0;
@@ -101,9 +117,36 @@ public:
 
 
 private:
-    struct Emitter;
+    // A shooter's unshot radiosity sampled on its geometry pyramid.
+    struct Emitter {
+        struct Texel {
+            Vec3f pos, nrm, vis;
+            float area = 0;
+            float radius = 0;
+            Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
+            float db_max = 0;  // largest luminance of db within the texel
+        };
+        uint32_t chart = 0;
+        std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
+        Vec3f center;
+        float radius = 0;
+        double scale = 1;
+    };
+    // Where a receiver chart gets one shooter's light from (cluster_links.cpp): kOpenLink
+    // for the chart-level link refinement (Gatherer::Shoot), otherwise the visibility in
+    // [0, 1] of a cluster link evaluated at the chart's root without rays.
+    static constexpr float kOpenLink = -1;
+    struct ClusterSample {
+        Vec3f pos, nrm, org;  // org: the ray origin, off the surface
+    };
     class DirectSampler;  // refine_direct.cpp
     class Gatherer;
+    void BuildClusters();
+    void LinkClusters(const Emitter& em, std::vector<float>* links, uint64_t* accepted,
+                      uint64_t* opened) const;
+    float ClusterVisibility(const ClusterTree::Node& node, const Emitter& em,
+                            SegmentBatch* batch, bool* valid) const;
+    double ReceiverTau() const;
     double ReferenceIrradiance() const;
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
     void CountNodes();
@@ -115,7 +158,8 @@ private:
                          SimplifiedFit& sf, std::vector<float>& coeffs);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
-    void Gather(uint32_t receiver, const std::vector<Emitter>& emitters);
+    void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
+                const std::vector<std::vector<float>>& links);
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
@@ -133,6 +177,9 @@ private:
     SolveOptions opt_;
     std::vector<ChartField> fields_;
     std::vector<uint8_t> emissive_;  // chart has emissive texels (shot in the first batch)
+    ClusterTree clusters_;           // built when Run() starts, from the charts alone
+    std::vector<ClusterSample> cluster_samples_;  // per chart: its level-1 texels
+    std::vector<uint32_t> cluster_sample_first_;  // chart c: [first[c], first[c + 1])
     SolveStats stats_;
     double reference_ = 0;  // brightest direct irradiance: floor of the refinement scale
     int next_batch_ = -1;
