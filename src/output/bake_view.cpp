@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "output/seam_graph.h"
 #include "solve/shading.h"
 
 #include <algorithm>
@@ -10,7 +11,7 @@
 
 namespace mebake::output {
 
-BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching stitching) {
     BakeView v;
     v.dir = dir;
     v.manifest = stream::ReadManifest(dir);
@@ -43,6 +44,8 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
                      v.solution.radiosity ? "radiosity" : "vector irradiance");
     const std::string kept = dir + "/solve/scene.json";
     v.scene = solve::LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
+    if (stitching == SeamStitching::On)
+        v.seams = BuildSeamStitch(v);
     return v;
 }
 
@@ -76,10 +79,12 @@ std::vector<uint32_t> AllCharts(const BakeView& view) {
 }
 
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
-                         bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
+                         bool radiosity_unknown, const Scene& scene, const std::string& tile_path,
+                         const ChartSeams* seams)
     : tile_(tile),
       field_(field),
       display_(field, 1.0 / double(std::max<uint32_t>(1, tile.meta.resolution))),
+      seams_(seams && !seams->empty() ? seams : nullptr),
       radiosity_(radiosity_unknown),
       scene_(scene) {
     default_material_.use_vertex_colors = true;
@@ -161,9 +166,15 @@ ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     return p;
 }
 
+void ChartShader::FieldAt(Vec2f uv, float* val) const {
+    display_.Eval(uv.x, uv.y, val);
+    if (seams_)
+        seams_->Apply(display_, uv.x, uv.y, val);
+}
+
 Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
     float val[9];
-    display_.Eval(p.uv.x, p.uv.y, val);
+    FieldAt(p.uv, val);
     Vec3f b = solve::ShadeRadiosity(val, radiosity_, p.normal, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(b[c]));
@@ -174,7 +185,7 @@ Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
 
 Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
     float val[9];
-    display_.Eval(p.uv.x, p.uv.y, val);
+    FieldAt(p.uv, val);
     Vec3f l = solve::ShadeGlossy(val, radiosity_, p.normal, view, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(l[c]));
@@ -185,7 +196,7 @@ Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
 
 void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
     float val[9];
-    display_.Eval(uv.x, uv.y, val);
+    FieldAt(uv, val);
     solve::VectorIrradianceAt(val, radiosity_, e);
     for (int c = 0; c < 3; ++c)
         CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));
