@@ -97,6 +97,13 @@ ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          local);
     }
     CHECK_EQ(tile.material.size(), tile.triangles.size());
+    if (seams_ && !seams_->normals().empty()) {
+        normal_ = tile.normal;
+        for (const auto& [v, n] : seams_->normals()) {
+            CHECK_LT(v, normal_.size());
+            normal_[v] = n;
+        }
+    }
     vertex_triangle_.assign(tile.position.size(), stream::kNoTriangle);
     for (size_t t = tile.triangles.size(); t-- > 0;)
         for (uint32_t v : tile.triangles[t])
@@ -116,7 +123,7 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     bool colored = !tile_.color.empty();
     for (int k = 0; k < 3; ++k) {
         uv += tile_.uv[f[k]] * b[k];
-        n += Vec3d(tile_.normal[f[k]]) * double(b[k]);
+        n += Vec3d(Normals()[f[k]]) * double(b[k]);
         const Vec3f ck = Color(f[k]);
         if (ck.x < 0)
             colored = false;
@@ -157,7 +164,7 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
 ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     ShadingPoint p;
     p.uv = tile_.uv[v];
-    Vec3f n = Normalize(tile_.normal[v]);
+    Vec3f n = Normalize(Normals()[v]);
     p.normal = Dot(n, n) > 0 ? n : Vec3f(0, 0, 1);
     const uint32_t t = vertex_triangle_[v];
     p.material =

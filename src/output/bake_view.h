@@ -144,6 +144,8 @@ public:
 
 private:
     Vec3f Color(uint32_t v) const;
+    // The tile's vertex normals, with the stitched ones at chart borders.
+    const std::vector<Vec3f>& Normals() const { return normal_.empty() ? tile_.normal : normal_; }
 
     const stream::ChartTile& tile_;
     const ChartField& field_;
@@ -152,6 +154,7 @@ private:
     bool radiosity_;
     const Scene& scene_;
     std::vector<uint32_t> vertex_triangle_;  // lowest triangle using each vertex
+    std::vector<Vec3f> normal_;              // empty: the tile's own
     Material default_material_;
 };
 

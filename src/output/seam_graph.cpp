@@ -31,7 +31,9 @@ struct Side {
     uint32_t chart = 0;
     Vec2f a, b;  // uv of g0 and g1
     float band = 0;
-    Vec3f normal;
+    Vec3f normal;              // of the face beside the edge
+    uint32_t v0 = 0, v1 = 0;   // the tile's vertices of g0 and g1
+    Vec3f n0, n1;              // their shading normals
     uint32_t intervals = 0;   // samples at t = k / intervals, k = 0..intervals
     std::vector<float> vals;  // (intervals + 1) x blocks
 };
@@ -54,6 +56,10 @@ ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile
         s.a = tile.uv[e.v0];
         s.b = tile.uv[e.v1];
         s.normal = FaceNormal(tile, e.triangle);
+        s.v0 = e.v0;
+        s.v1 = e.v1;
+        s.n0 = tile.normal[e.v0];
+        s.n1 = tile.normal[e.v1];
         const double len = Length(Vec3d(tile.position[e.v1]) - Vec3d(tile.position[e.v0]));
         s.intervals = texel > 0 ? uint32_t(std::clamp(std::ceil(kSamplesPerTexel * len / texel),
                                                       1.0, double(kMaxIntervals)))
@@ -74,25 +80,40 @@ ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile
     return out;
 }
 
+// An end of a stitched edge in one chart.
+struct End {
+    uint64_t g;
+    uint32_t v;       // the tile's vertex
+    Vec3f normal;     // its shading normal there
+    uint32_t target;  // index of the edge's target sample at this end
+};
+
+// Per vertex: the sums of the charts' E and shading normals there (each chart once).
+struct VertexSum {
+    std::vector<double> e;
+    Vec3d normal{};
+    uint32_t n = 0;
+};
+
 // The stitched edges of every chart as they are found, ends filled in at the end.
 struct Collected {
     std::vector<std::vector<SeamEdge>> edges;
-    std::vector<std::vector<Key>> ends;  // (g0, g1) of each edge
+    std::vector<std::vector<End>> ends;
     std::vector<std::vector<float>> targets;
-    // Per vertex: the sum of the charts' E there and how many (each chart once).
-    std::unordered_map<uint64_t, std::pair<std::vector<double>, uint32_t>> vertex;
+    std::unordered_map<uint64_t, VertexSum> vertex;
     std::unordered_set<Key, KeyHash> counted;  // (vertex, chart) already in `vertex`
 };
 
 void AddVertex(Collected& col, uint64_t g, const Side& s, bool last, int blocks) {
     if (!col.counted.insert({g, s.chart}).second)
         return;
-    auto& [sum, n] = col.vertex[g];
-    sum.resize(size_t(blocks), 0.0);
+    VertexSum& sum = col.vertex[g];
+    sum.e.resize(size_t(blocks), 0.0);
     const float* v = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
     for (int b = 0; b < blocks; ++b)
-        sum[size_t(b)] += double(v[b]);
-    ++n;
+        sum.e[size_t(b)] += double(v[b]);
+    sum.normal += Vec3d(last ? s.n1 : s.n0);
+    ++sum.n;
 }
 
 // Records the edge (g0, g1) for both sides with the mean of their samples as targets.
@@ -108,7 +129,8 @@ void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int b
         for (size_t i = 0; i < x.vals.size(); ++i)
             targets.push_back(0.5f * (x.vals[i] + y.vals[i]));
         col.edges[s->chart].push_back(e);
-        col.ends[s->chart].push_back(key);
+        col.ends[s->chart].push_back({key.first, s->v0, s->n0, e.first});
+        col.ends[s->chart].push_back({key.second, s->v1, s->n1, e.first + e.count - 1});
         AddVertex(col, key.first, *s, false, blocks);
         AddVertex(col, key.second, *s, true, blocks);
     }
@@ -199,19 +221,27 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
     std::vector<ChartSeams> out(charts);
     for (size_t c = 0; c < charts; ++c) {
         auto& targets = col.targets[c];
-        for (size_t k = 0; k < col.edges[c].size(); ++k) {
-            const SeamEdge& e = col.edges[c][k];
-            for (const auto& [g, at] : {std::pair{col.ends[c][k].first, e.first},
-                                        std::pair{col.ends[c][k].second, e.first + e.count - 1}}) {
-                const auto& [sum, n] = col.vertex.at(g);
-                for (int b = 0; b < blocks; ++b)
-                    targets[size_t(at) * size_t(blocks) + size_t(b)] =
-                        float(sum[size_t(b)] / double(n));
-            }
+        std::vector<std::pair<uint32_t, Vec3f>> normals;
+        for (const End& end : col.ends[c]) {
+            const VertexSum& sum = col.vertex.at(end.g);
+            for (int b = 0; b < blocks; ++b)
+                targets[size_t(end.target) * size_t(blocks) + size_t(b)] =
+                    float(sum.e[size_t(b)] / double(sum.n));
+            // One shading normal on both sides too, unless the copies disagree as at a
+            // crease (ingest keeps each side's own normal there).
+            const Vec3f shared(Normalize(sum.normal));
+            if (Dot(shared, Normalize(end.normal)) >= kFoldCos)
+                normals.push_back({end.v, shared});
         }
+        std::sort(normals.begin(), normals.end(),
+                  [](const auto& x, const auto& y) { return x.first < y.first; });
+        normals.erase(std::unique(normals.begin(), normals.end(),
+                                  [](const auto& x, const auto& y) { return x.first == y.first; }),
+                      normals.end());
         st.samples += targets.size() / size_t(blocks);
         if (!col.edges[c].empty())
-            out[c] = ChartSeams(blocks, std::move(col.edges[c]), std::move(targets));
+            out[c] = ChartSeams(blocks, std::move(col.edges[c]), std::move(targets),
+                                std::move(normals));
         col.ends[c] = {};
     }
     if (stats)

@@ -26,8 +26,12 @@ uint32_t Cell(double x, uint32_t n) {
 
 }  // namespace
 
-ChartSeams::ChartSeams(int blocks, std::vector<SeamEdge> edges, std::vector<float> targets)
-    : blocks_(blocks), edges_(std::move(edges)), targets_(std::move(targets)) {
+ChartSeams::ChartSeams(int blocks, std::vector<SeamEdge> edges, std::vector<float> targets,
+                       std::vector<std::pair<uint32_t, Vec3f>> normals)
+    : blocks_(blocks),
+      edges_(std::move(edges)),
+      targets_(std::move(targets)),
+      normals_(std::move(normals)) {
     CHECK(blocks_ >= 1 && blocks_ <= 9);
     if (edges_.empty())
         return;

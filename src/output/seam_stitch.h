@@ -14,7 +14,8 @@
 // falling to 0 at the band's width b_e (a few texels, tied to the leaf size at the edge).
 // The inverse-distance weights make E* = S_e(t) exactly on an edge (from both sides) and
 // keep E* continuous everywhere (Shepard interpolation of the border corrections); beyond
-// every band the chart shows its own field. Vector irradiance is a world-space quantity, so
+// every band the chart shows its own field. The shading normals of the edges' vertices are
+// made one as well (the mean of their copies), so B is one value from both sides. Vector irradiance is a world-space quantity, so
 // the mean of both sides' E is meaningful; B then follows with each side's shading normal.
 #pragma once
 
@@ -38,12 +39,16 @@ struct SeamEdge {
 class ChartSeams {
 public:
     ChartSeams() = default;
-    // Builds the look-up grid over the unit square.
-    ChartSeams(int blocks, std::vector<SeamEdge> edges, std::vector<float> targets);
+    // Builds the look-up grid over the unit square. `normals`: (tile vertex, shading normal)
+    // for the ends of the edges, sorted by vertex: the mean of the copies in every chart
+    // there, so the interpolated shading normal is one along the edge as well.
+    ChartSeams(int blocks, std::vector<SeamEdge> edges, std::vector<float> targets,
+               std::vector<std::pair<uint32_t, Vec3f>> normals = {});
 
     bool empty() const { return edges_.empty(); }
     size_t edge_count() const { return edges_.size(); }
     const std::vector<SeamEdge>& edges() const { return edges_; }
+    const std::vector<std::pair<uint32_t, Vec3f>>& normals() const { return normals_; }
     // Target of edge e at t in [0, 1].
     void Target(const SeamEdge& e, double t, float* out) const;
     // val holds field's value at (u, v); adds the stitch correction to it.
@@ -53,6 +58,7 @@ private:
     int blocks_ = 0;
     std::vector<SeamEdge> edges_;
     std::vector<float> targets_;
+    std::vector<std::pair<uint32_t, Vec3f>> normals_;
     // Uniform grid of n x n cells; cell k lists the edges whose band reaches it.
     uint32_t n_ = 0;
     std::vector<uint32_t> cell_start_, cell_edges_;

@@ -33,6 +33,7 @@ struct GridOptions {
     Vec3f a{2, 4, 6};            // E_z at the origin per colour
     float bx = 0.6f, by = 0.3f;  // gradient of E_z
     std::vector<float> offset;   // per chart, added to its fitted E_z (all colours)
+    float tilt = 0;              // odd charts' vertex normals (tilt, 0, 1): per-chart normals
 };
 
 float Span(const GridOptions& o) {
@@ -80,7 +81,7 @@ void WriteGridBake(const std::string& dir, const GridOptions& o) {
                     const int gc = cx * o.m + q, gr = cy * o.m + r;
                     const Vec3f p = lattice(gc, gr);
                     t.position.push_back(p);
-                    t.normal.push_back(Vec3f(0, 0, 1));
+                    t.normal.push_back(Normalize(Vec3f(c % 2 ? o.tilt : 0.f, 0, 1)));
                     t.uv.push_back(Vec2f(o.inset + span * (p.x - float(cx)),
                                          o.inset + span * (p.y - float(cy))));
                     t.vertex_id.push_back(uint64_t(gr) * uint64_t(cols) + uint64_t(gc));
@@ -302,7 +303,8 @@ TEST_F(StitchTest, ExactFieldStaysExact) {
 }
 
 TEST_F(StitchTest, BordersShowOneValue) {
-    const GridOptions o = Perturbed();
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;  // and neighbouring charts' vertex normals differ by 17 degrees
     WriteGridBake(dir_, o);
     const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
     const BakeView view = OpenBakeView(dir_);
@@ -374,7 +376,8 @@ TEST_F(StitchTest, LightMapFilteredAcrossSeamsAgrees) {
 }
 
 TEST_F(StitchTest, VertexCopiesAgree) {
-    const GridOptions o = Perturbed();
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;
     WriteGridBake(dir_, o);
     const BakeView view = OpenBakeView(dir_);
     LoadShaders(view);
