@@ -155,6 +155,7 @@ int main(int argc, char** argv) {
     cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`")->required();
     cmp_cmd->add_option("-o,--output", cmp.output, "JSON summary ('-' = stdout)")->capture_default_str();
     cmp_cmd->add_flag("--points", cmp.points, "Also list each point's reference and baked B");
+    cmp_cmd->add_flag("--no-stitch", cmp.no_stitch, "Score each chart's own field at chart borders (no stitching; to compare)");
 
     // export  (#include "app/export_commands.h")
     mebake::app::ExportCommand exp;

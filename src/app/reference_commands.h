@@ -27,6 +27,7 @@ struct CompareCommand {
     std::string reference;     // JSON written by `mebake reference`
     std::string output = "-";  // JSON summary, "-" = stdout
     bool points = false;       // also list every point's baked and reference B
+    bool no_stitch = false;    // score each chart's own field at chart borders
 };
 int RunCompare(const CompareCommand& c);
 
