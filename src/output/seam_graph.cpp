@@ -14,7 +14,8 @@ namespace {
 
 constexpr double kSamplesPerTexel = 2;
 constexpr uint32_t kMaxIntervals = 64;
-constexpr double kMinBandTexels = 2, kMaxBandTexels = 6;
+constexpr double kMinBandTexels = 2, kMaxBandTexels = 3;
+constexpr double kBrightPower = 4;  // brightness 2x -> weight 16x
 
 using Key = std::pair<uint64_t, uint64_t>;
 
@@ -31,9 +32,9 @@ struct Side {
     uint32_t chart = 0;
     Vec2f a, b;  // uv of g0 and g1
     float band = 0;
-    Vec3f normal;              // of the face beside the edge
-    uint32_t v0 = 0, v1 = 0;   // the tile's vertices of g0 and g1
-    Vec3f n0, n1;              // their shading normals
+    Vec3f normal;             // of the face beside the edge
+    uint32_t v0 = 0, v1 = 0;  // the tile's vertices of g0 and g1
+    Vec3f n0, n1;             // their shading normals
     uint32_t intervals = 0;   // samples at t = k / intervals, k = 0..intervals
     std::vector<float> vals;  // (intervals + 1) x blocks
 };
@@ -91,6 +92,7 @@ struct End {
 // Per vertex: the sums of the charts' E and shading normals there (each chart once).
 struct VertexSum {
     std::vector<double> e;
+    double weight = 0;
     Vec3d normal{};
     uint32_t n = 0;
 };
@@ -104,14 +106,29 @@ struct Collected {
     std::unordered_set<Key, KeyHash> counted;  // (vertex, chart) already in `vertex`
 };
 
+// Weight of a side's value in a target: its brightness (luminance of n . E, or of B for a
+// radiosity solution) to the power kBrightPower, so a side much darker than the other
+// counts little. Where two charts disagree much, the darker one is nearly always the wrong
+// one (light lost to occluded virtual points, a shadow line one chart misplaced); see
+// docs/export.md.
+double Weight(const float* v, const Vec3f& n, int blocks) {
+    const float w[3] = {0.2126f, 0.7152f, 0.0722f};
+    double y = 0;
+    for (int c = 0; c < 3; ++c)
+        y += w[c] * (blocks == 3 ? v[c] : n.x * v[3 * c] + n.y * v[3 * c + 1] + n.z * v[3 * c + 2]);
+    return std::pow(std::max(y, 1e-6), kBrightPower);
+}
+
 void AddVertex(Collected& col, uint64_t g, const Side& s, bool last, int blocks) {
     if (!col.counted.insert({g, s.chart}).second)
         return;
     VertexSum& sum = col.vertex[g];
     sum.e.resize(size_t(blocks), 0.0);
     const float* v = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
+    const double w = Weight(v, s.normal, blocks);
     for (int b = 0; b < blocks; ++b)
-        sum.e[size_t(b)] += double(v[b]);
+        sum.e[size_t(b)] += w * double(v[b]);
+    sum.weight += w;
     sum.normal += Vec3d(last ? s.n1 : s.n0);
     ++sum.n;
 }
@@ -126,8 +143,13 @@ void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int b
         e.band = s->band;
         e.first = uint32_t(targets.size() / size_t(blocks));
         e.count = s->intervals + 1;
-        for (size_t i = 0; i < x.vals.size(); ++i)
-            targets.push_back(0.5f * (x.vals[i] + y.vals[i]));
+        for (uint32_t k = 0; k <= s->intervals; ++k) {
+            const float* vx = &x.vals[size_t(k) * size_t(blocks)];
+            const float* vy = &y.vals[size_t(k) * size_t(blocks)];
+            const double wx = Weight(vx, x.normal, blocks), wy = Weight(vy, y.normal, blocks);
+            for (int b = 0; b < blocks; ++b)
+                targets.push_back(float((wx * vx[b] + wy * vy[b]) / (wx + wy)));
+        }
         col.edges[s->chart].push_back(e);
         col.ends[s->chart].push_back({key.first, s->v0, s->n0, e.first});
         col.ends[s->chart].push_back({key.second, s->v1, s->n1, e.first + e.count - 1});
@@ -226,7 +248,7 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
             const VertexSum& sum = col.vertex.at(end.g);
             for (int b = 0; b < blocks; ++b)
                 targets[size_t(end.target) * size_t(blocks) + size_t(b)] =
-                    float(sum.e[size_t(b)] / double(sum.n));
+                    float(sum.e[size_t(b)] / sum.weight);
             // One shading normal on both sides too, unless the copies disagree as at a
             // crease (ingest keeps each side's own normal there).
             const Vec3f shared(Normalize(sum.normal));
@@ -240,8 +262,8 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
                       normals.end());
         st.samples += targets.size() / size_t(blocks);
         if (!col.edges[c].empty())
-            out[c] = ChartSeams(blocks, std::move(col.edges[c]), std::move(targets),
-                                std::move(normals));
+            out[c] =
+                ChartSeams(blocks, std::move(col.edges[c]), std::move(targets), std::move(normals));
         col.ends[c] = {};
     }
     if (stats)

@@ -15,8 +15,9 @@
 // The inverse-distance weights make E* = S_e(t) exactly on an edge (from both sides) and
 // keep E* continuous everywhere (Shepard interpolation of the border corrections); beyond
 // every band the chart shows its own field. The shading normals of the edges' vertices are
-// made one as well (the mean of their copies), so B is one value from both sides. Vector irradiance is a world-space quantity, so
-// the mean of both sides' E is meaningful; B then follows with each side's shading normal.
+// made one as well (the mean of their copies), so B is one value from both sides. Vector irradiance
+// is a world-space quantity, so the mean of both sides' E is meaningful; B then follows with each
+// side's shading normal.
 #pragma once
 
 #include "core/vec.h"
