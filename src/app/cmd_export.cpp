@@ -57,6 +57,7 @@ int RunExport(const ExportCommand& c) {
     o.tone_curve = c.tonemap;
     o.glb_mode = c.unlit ? io::GlbLightMapMode::Unlit : io::GlbLightMapMode::Emissive;
     o.float_colors = c.float_output;
+    o.stitch = !c.no_stitch;
     o.force = c.force;
     output::RunExportJob(o);
     return 0;
@@ -86,6 +87,7 @@ int RunRender(const RenderCommand& c) {
     if (!c.background.empty())
         o.background = Vec3f(ToVec3(c.background, "--background"));
     o.exr_type = c.float_output ? io::ExrPixelType::Float : io::ExrPixelType::Half;
+    o.stitch = !c.no_stitch;
     o.force = c.force;
     output::RunRenderJob(o);
     return 0;

@@ -209,7 +209,9 @@ int RunCompare(const CompareCommand& c) {
         ref.push_back(ReadVec3(p, c.reference, i, "B"));
         se.push_back(ReadVec3(p, c.reference, i, "B_se"));
     }
-    const output::BakeView view = output::OpenBakeView(c.dir);
+    const output::BakeView view =
+        output::OpenBakeView(c.dir, output::FieldLoading::All,
+                             c.no_stitch ? output::SeamStitching::Off : output::SeamStitching::On);
     std::vector<output::ProbeValue> values;
     const output::ProbeError e = Score(view, sites, ref, se, values);
     spdlog::info("bake vs reference: relative RMS {:.2f}% (reference noise {:.2f}%), max {:.1f}%",

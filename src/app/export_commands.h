@@ -25,7 +25,8 @@ struct ExportCommand {
     std::string compression = "zip";  // EXR: zip, piz, none
     bool unlit = false;               // .glb: KHR_materials_unlit instead of an emissive material
     int threads = 0;
-    bool force = false;  // overwrite existing outputs
+    bool force = false;      // overwrite existing outputs
+    bool no_stitch = false;  // each chart's own field at chart borders
 };
 int RunExport(const ExportCommand& c);
 
@@ -43,6 +44,7 @@ struct RenderCommand {
     bool float_output = false;  // EXR float instead of half
     int threads = 0;
     bool force = false;
+    bool no_stitch = false;  // each chart's own field at chart borders
 };
 int RunRender(const RenderCommand& c);
 

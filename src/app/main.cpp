@@ -187,6 +187,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
     cmp_cmd->add_option("-o,--output", cmp.output, "JSON summary ('-' = stdout)")->capture_default_str();
     cmp_cmd->add_flag("--points", cmp.points, "Also list each point's reference and baked B");
+    cmp_cmd->add_flag("--no-stitch", cmp.no_stitch, "Score each chart's own field at chart borders (no stitching; to compare)");
 
     // export  (#include "app/export_commands.h")
     mebake::app::ExportCommand exp;
@@ -213,6 +214,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"zip", "piz", "none"}));
     exp_cmd->add_flag("--unlit", exp.unlit, ".glb: KHR_materials_unlit base colour instead of an emissive light map");
     exp_cmd->add_option("--threads", exp.threads, "Worker threads (0: all cores)")->capture_default_str();
+    exp_cmd->add_flag("--no-stitch", exp.no_stitch, "Show each chart's own field at chart borders (no stitching; to compare)");
     exp_cmd->add_flag("-f,--force", exp.force, "Overwrite existing output files");
     std::string exp_web;
     bool exp_web_plain = false;
@@ -252,6 +254,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));
     ren_cmd->add_flag("--float", ren.float_output, "EXR as 32-bit float (default half)");
     ren_cmd->add_option("--threads", ren.threads, "Worker threads (0: all cores)")->capture_default_str();
+    ren_cmd->add_flag("--no-stitch", ren.no_stitch, "Show each chart's own field at chart borders (no stitching; to compare)");
     ren_cmd->add_flag("-f,--force", ren.force, "Overwrite an existing image");
 
     // bake

@@ -40,6 +40,7 @@ struct CompareCommand {
     std::string reference;     // JSON written by `mebake reference`
     std::string output = "-";  // JSON summary, "-" = stdout
     bool points = false;       // also list every point's baked and reference B
+    bool no_stitch = false;    // score each chart's own field at chart borders
     // Pictures: `compare IMAGE REFERENCE` when both are .png/.exr files (output/image_compare.h).
     std::string diff;         // false-colour difference PNG
     double diff_range = 0.1;  // display difference (sRGB 0..1) at full colour

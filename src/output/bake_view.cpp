@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "output/seam_graph.h"
 #include "solve/shading.h"
 
 #include <algorithm>
@@ -10,7 +11,7 @@
 
 namespace mebake::output {
 
-BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching stitching) {
     BakeView v;
     v.dir = dir;
     v.manifest = stream::ReadManifest(dir);
@@ -43,6 +44,8 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields) {
                      v.solution.radiosity ? "radiosity" : "vector irradiance");
     const std::string kept = dir + "/solve/scene.json";
     v.scene = solve::LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
+    if (stitching == SeamStitching::On)
+        v.seams = BuildSeamStitch(v);
     return v;
 }
 
@@ -76,10 +79,12 @@ std::vector<uint32_t> AllCharts(const BakeView& view) {
 }
 
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
-                         bool radiosity_unknown, const Scene& scene, const std::string& tile_path)
+                         bool radiosity_unknown, const Scene& scene, const std::string& tile_path,
+                         const ChartSeams* seams)
     : tile_(tile),
       field_(field),
       display_(field, 1.0 / double(std::max<uint32_t>(1, tile.meta.resolution))),
+      seams_(seams && !seams->empty() ? seams : nullptr),
       radiosity_(radiosity_unknown),
       scene_(scene) {
     default_material_.use_vertex_colors = true;
@@ -92,6 +97,13 @@ ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          local);
     }
     CHECK_EQ(tile.material.size(), tile.triangles.size());
+    if (seams_ && !seams_->normals().empty()) {
+        normal_ = tile.normal;
+        for (const auto& [v, n] : seams_->normals()) {
+            CHECK_LT(v, normal_.size());
+            normal_[v] = n;
+        }
+    }
     vertex_triangle_.assign(tile.position.size(), stream::kNoTriangle);
     for (size_t t = tile.triangles.size(); t-- > 0;)
         for (uint32_t v : tile.triangles[t])
@@ -111,7 +123,7 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     bool colored = !tile_.color.empty();
     for (int k = 0; k < 3; ++k) {
         uv += tile_.uv[f[k]] * b[k];
-        n += Vec3d(tile_.normal[f[k]]) * double(b[k]);
+        n += Vec3d(Normals()[f[k]]) * double(b[k]);
         const Vec3f ck = Color(f[k]);
         if (ck.x < 0)
             colored = false;
@@ -152,7 +164,7 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
 ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     ShadingPoint p;
     p.uv = tile_.uv[v];
-    Vec3f n = Normalize(tile_.normal[v]);
+    Vec3f n = Normalize(Normals()[v]);
     p.normal = Dot(n, n) > 0 ? n : Vec3f(0, 0, 1);
     const uint32_t t = vertex_triangle_[v];
     p.material =
@@ -161,9 +173,15 @@ ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     return p;
 }
 
+void ChartShader::FieldAt(Vec2f uv, float* val) const {
+    display_.Eval(uv.x, uv.y, val);
+    if (seams_)
+        seams_->Apply(display_, uv.x, uv.y, val);
+}
+
 Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
     float val[9];
-    display_.Eval(p.uv.x, p.uv.y, val);
+    FieldAt(p.uv, val);
     Vec3f b = solve::ShadeRadiosity(val, radiosity_, p.normal, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(b[c]));
@@ -174,7 +192,7 @@ Vec3f ChartShader::Radiosity(const ShadingPoint& p) const {
 
 Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
     float val[9];
-    display_.Eval(p.uv.x, p.uv.y, val);
+    FieldAt(p.uv, val);
     Vec3f l = solve::ShadeGlossy(val, radiosity_, p.normal, view, p.albedo, *p.material);
     for (int c = 0; c < 3; ++c) {
         CHECK(std::isfinite(l[c]));
@@ -185,7 +203,7 @@ Vec3f ChartShader::Glossy(const ShadingPoint& p, const Vec3f& view) const {
 
 void ChartShader::Irradiance(Vec2f uv, Vec3f e[3]) const {
     float val[9];
-    display_.Eval(uv.x, uv.y, val);
+    FieldAt(uv, val);
     solve::VectorIrradianceAt(val, radiosity_, e);
     for (int c = 0; c < 3; ++c)
         CHECK(std::isfinite(e[c].x + e[c].y + e[c].z));

@@ -9,12 +9,14 @@
 // master element's virtual part takes normal, colour and material from its nearest real
 // point (the seed paper's "nearest real triangle"), while E is still evaluated where the
 // point is, so texels that straddle the chart's outline filter smoothly. E is the chart's
-// field as continuous_field.h reconstructs it: C0 across quadtree node borders.
+// field as continuous_field.h reconstructs it (C0 across quadtree node borders), stitched to
+// its neighbours at chart borders (seam_stitch.h, when the view has the stitch data).
 #pragma once
 
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "output/continuous_field.h"
+#include "output/seam_stitch.h"
 #include "solve/field.h"
 #include "solve/scene.h"
 #include "solve/solution.h"
@@ -42,12 +44,15 @@ struct BakeView {
     Scene scene;
     Solution solution;  // fields empty when opened with FieldLoading::OnDemand
     std::shared_ptr<const SolutionReader> solution_reader;  // OnDemand only
+    std::vector<ChartSeams> seams;  // per chart (seam_graph.h); empty: not stitched
 
     size_t chart_count() const { return manifest.charts.size(); }
     std::string TilePath(uint32_t chart) const { return stream::TilePath(dir, chart); }
     // Chart c's field: solution.fields[c], or read from solve/solution.bin on demand (then
     // the pointer owns it). Thread-safe.
     std::shared_ptr<const ChartField> Field(uint32_t c) const;
+    // Chart c's stitch data, or nullptr when the view is not stitched.
+    const ChartSeams* Seams(uint32_t c) const { return c < seams.size() ? &seams[c] : nullptr; }
 };
 
 // All: every chart's field is read and checked at open (render and reference, which
@@ -55,11 +60,17 @@ struct BakeView {
 // resident memory follows the charts being written (export).
 enum class FieldLoading { All, OnDemand };
 
+// On: the fields are stitched across chart borders (seam_graph.h; one more pass over the
+// tiles at open). Off: each chart shows its own field (to measure what stitching changes).
+enum class SeamStitching { On, Off };
+
 // Reads the manifest, solve/solution.bin and the scene the solve used (solve/scene.json
-// when the solve had one, else the inputs' materials and the default rig). Throws
+// when the solve had one, else the inputs' materials and the default rig), and builds the
+// stitch data. Throws
 // Error(Usage) when the directory is not ingested or not solved, Error(Corrupt) naming the
 // file when the solution does not match the charts.
-BakeView OpenBakeView(const std::string& dir, FieldLoading fields = FieldLoading::All);
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields = FieldLoading::All,
+                      SeamStitching stitching = SeamStitching::On);
 
 // The resolution of every chart from the manifest, validated (Error(Corrupt) otherwise).
 std::vector<uint32_t> ChartResolutions(const BakeView& view);
@@ -103,10 +114,12 @@ struct ShadingPoint {
 
 class ChartShader {
 public:
-    // Keeps references to tile, field and scene. Throws Error(Corrupt) naming `tile_path`
-    // when a triangle's material is not in the scene.
+    // Keeps references to tile, field, scene and seams (BakeView::Seams; nullptr: the field
+    // as fitted at chart borders). Throws Error(Corrupt) naming `tile_path` when a
+    // triangle's material is not in the scene.
     ChartShader(const stream::ChartTile& tile, const ChartField& field, bool radiosity_unknown,
-                const Scene& scene, const std::string& tile_path);
+                const Scene& scene, const std::string& tile_path,
+                const ChartSeams* seams = nullptr);
 
     // The point of triangle t with barycentrics (b0, b1, b2) (they need not sum to 1
     // exactly; weights are used as given).
@@ -124,17 +137,24 @@ public:
     // Vector irradiance E at chart point uv, per colour (zero for a radiosity solution).
     void Irradiance(Vec2f uv, Vec3f e[3]) const;
 
+    // The shown field's blocks at chart point uv (field.blocks() floats).
+    void FieldAt(Vec2f uv, float* val) const;
+
     const stream::ChartTile& tile() const { return tile_; }
 
 private:
     Vec3f Color(uint32_t v) const;
+    // The tile's vertex normals, with the stitched ones at chart borders.
+    const std::vector<Vec3f>& Normals() const { return normal_.empty() ? tile_.normal : normal_; }
 
     const stream::ChartTile& tile_;
     const ChartField& field_;
     ContinuousField display_;  // the field as shown: C0 across node borders
+    const ChartSeams* seams_;  // and stitched across chart borders
     bool radiosity_;
     const Scene& scene_;
     std::vector<uint32_t> vertex_triangle_;  // lowest triangle using each vertex
+    std::vector<Vec3f> normal_;              // empty: the tile's own
     Material default_material_;
 };
 

@@ -114,7 +114,8 @@ void RunExportJob(const ExportJobOptions& c) {
     const auto t0 = Clock::now();
     CheckRequested(c);
     // Fields are read a chart at a time: memory follows the charts being written.
-    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand);
+    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand,
+                                 c.stitch ? SeamStitching::On : SeamStitching::Off);
     const Atlas atlas = PackAtlas(ChartResolutions(view), c.atlas);
     CheckFreshOutputs(c, atlas);
     spdlog::info("{} charts in {} atlas page{} ({} texels, {:.1f}% filled)", view.chart_count(),
@@ -186,7 +187,8 @@ void RunExportJob(const ExportJobOptions& c) {
 void RunRenderJob(const RenderJobOptions& c) {
     const auto t0 = Clock::now();
     CheckFresh(c.output, c.force);
-    BakeView view = OpenBakeView(c.dir);
+    BakeView view =
+        OpenBakeView(c.dir, FieldLoading::All, c.stitch ? SeamStitching::On : SeamStitching::Off);
     RenderOptions ro;
     ro.camera = DefaultCamera(view, c.width, c.height, c.fov);
     if (c.eye)

@@ -24,6 +24,7 @@ struct ExportJobOptions {
     std::string tone_curve;  // its name, for the statistics
     io::GlbLightMapMode glb_mode = io::GlbLightMapMode::Emissive;
     bool float_colors = false;  // PLY vertex colours as linear floats
+    bool stitch = true;         // fields stitched across chart borders (seam_graph.h)
     bool force = false;         // overwrite existing outputs
 };
 
@@ -42,6 +43,7 @@ struct RenderJobOptions {
     std::optional<Vec3f> background;  // unset: the scene's sky
     ToneMap tone;
     io::ExrPixelType exr_type = io::ExrPixelType::Half;
+    bool stitch = true;  // fields stitched across chart borders (seam_graph.h)
     bool force = false;
 };
 

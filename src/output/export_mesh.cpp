@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "io/mesh_format.h"
 #include "output/lightmap.h"
+#include "output/texel_stitch.h"
 
 #include <algorithm>
 #include <cctype>
@@ -95,8 +96,9 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
     go.temp_dir = opt.temp_dir;
     io::GlbWriter glb(go);
     const uint32_t pages = uint32_t(atlas.pages.size());
+    const auto stitch = StitchForView(view, atlas, MapContent::Radiosity);
     for (uint32_t p = 0; p < pages; ++p)
-        CHECK_EQ(glb.AddLightMapMaterial(EncodeLightMapPng(view, atlas, p, opt.tone),
+        CHECK_EQ(glb.AddLightMapMaterial(EncodeLightMapPng(view, atlas, p, opt.tone, stitch.get()),
                                          fmt::format("lightmap page {}", p + 1)),
                  p);
     std::vector<uint32_t> order = AllCharts(view);

@@ -2,8 +2,10 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "core/parallel.h"
 #include "io/png_writer.h"
+#include "output/texel_stitch.h"
 
 #include <algorithm>
 #include <cctype>
@@ -48,7 +50,8 @@ ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const 
                          atlas.charts[c].resolution);
         g.fields[size_t(k)] = view.Field(c);
         g.shaders[size_t(k)] = std::make_unique<ChartShader>(
-            tile, *g.fields[size_t(k)], view.solution.radiosity, view.scene, path);
+            tile, *g.fields[size_t(k)], view.solution.radiosity, view.scene, path,
+            view.Seams(c));
     });
     return g;
 }
@@ -69,31 +72,38 @@ std::vector<std::string> MapChannelNames(MapContent content) {
     return names;
 }
 
+void ShadeTexel(const ChartShader& shader, Vec2f uv, MapContent content, float* px) {
+    if (content == MapContent::Radiosity) {
+        const Vec3f b = shader.Radiosity(shader.AtUv(uv));
+        px[0] = b.x;
+        px[1] = b.y;
+        px[2] = b.z;
+        px[3] = 1;
+        return;
+    }
+    Vec3f e[3];
+    shader.Irradiance(uv, e);
+    for (int axis = 0; axis < 3; ++axis)
+        for (int c = 0; c < 3; ++c)
+            px[axis * 3 + c] = e[c][axis];
+}
+
 void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
                     MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
-                    size_t stride) {
+                    size_t stride, const TexelStitch* stitch) {
     const uint32_t g = atlas.gutter, res = atlas.charts[chart].resolution, block = res + 2 * g;
     CHECK_LE(row_end, block);
     const size_t nc = size_t(MapChannels(content));
     for (uint32_t by = row_begin; by < row_end; ++by) {
         float* row = out + size_t(by - row_begin) * stride;
         // The square's texels, then the left and right gutters as copies of its border.
+        const uint32_t j = std::clamp(by, g, g + res - 1) - g;
         for (uint32_t bx = g; bx < g + res; ++bx) {
             float* px = row + size_t(bx) * nc;
-            const Vec2f uv = atlas.TexelUv(chart, bx, by);
-            if (content == MapContent::Radiosity) {
-                const Vec3f b = shader.Radiosity(shader.AtUv(uv));
-                px[0] = b.x;
-                px[1] = b.y;
-                px[2] = b.z;
-                px[3] = 1;
-            } else {
-                Vec3f e[3];
-                shader.Irradiance(uv, e);
-                for (int axis = 0; axis < 3; ++axis)
-                    for (int c = 0; c < 3; ++c)
-                        px[axis * 3 + c] = e[c][axis];
-            }
+            if (const float* s = stitch ? stitch->Find(chart, bx - g, j) : nullptr)
+                std::copy_n(s, nc, px);
+            else
+                ShadeTexel(shader, atlas.TexelUv(chart, bx, by), content, px);
         }
         for (uint32_t bx = 0; bx < g; ++bx) {
             std::copy_n(row + size_t(g) * nc, nc, row + size_t(bx) * nc);
@@ -103,7 +113,8 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
 }
 
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows, size_t group) {
+                 const PageSink& sink, uint32_t band_rows, size_t group,
+                 const TexelStitch* stitch) {
     CHECK_LT(page, atlas.pages.size());
     CHECK_GE(band_rows, 1u);
     const AtlasPage& pg = atlas.pages[page];
@@ -154,7 +165,7 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
                 if (by >= atlas.block(c))
                     return;  // a smaller block than the shelf's height
                 float* out = rows_buffer.data() + size_t(r) * stride + size_t(ac.x) * nc;
-                FillChartBlock(*g.shaders[k], atlas, c, content, by, by + 1, out, stride);
+                FillChartBlock(*g.shaders[k], atlas, c, content, by, by + 1, out, stride, stitch);
             });
         }
         emit(shelf.y, shelf.height);
@@ -189,7 +200,7 @@ void ToneMapBand(std::span<const float> pixels, const ToneMap& tone, std::vector
 }
 
 void WritePngPage(const BakeView& view, const Atlas& atlas, uint32_t page, const ToneMap& tone,
-                  io::OutputStream& out) {
+                  const TexelStitch* stitch, io::OutputStream& out) {
     const AtlasPage& pg = atlas.pages[page];
     io::PngWriter png(out, int(pg.width), int(pg.height), 3);
     std::vector<uint8_t> bytes;
@@ -197,7 +208,8 @@ void WritePngPage(const BakeView& view, const Atlas& atlas, uint32_t page, const
                 [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
                     ToneMapBand(pixels, tone, bytes);
                     png.WriteRows(bytes, int(rows));
-                });
+                },
+                64, 0, stitch);
     png.Finish();
 }
 
@@ -216,13 +228,14 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
     const uint32_t pages = uint32_t(atlas.pages.size());
     if (path == "-" && pages > 1)
         UsageError("the atlas has {} pages; give a file name instead of '-'", pages);
+    const auto stitch = StitchForView(view, atlas, content);
     std::vector<std::string> written;
     for (uint32_t p = 0; p < pages; ++p) {
         const std::string file = PagePath(path, p, pages);
         const AtlasPage& pg = atlas.pages[p];
         if (png) {
             auto out = io::OutputStream::Open(file);
-            WritePngPage(view, atlas, p, options.tone, *out);
+            WritePngPage(view, atlas, p, options.tone, stitch.get(), *out);
             out->Commit();
         } else {
             io::ExrOptions eo;
@@ -241,7 +254,8 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
             ComputePage(view, atlas, p, content,
                         [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
                             w.WriteRows(pixels, int(rows));
-                        });
+                        },
+                        64, 0, stitch.get());
             w.Commit();
         }
         written.push_back(file);
@@ -250,12 +264,25 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
 }
 
 std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas, uint32_t page,
-                                       const ToneMap& tone) {
+                                       const ToneMap& tone, const TexelStitch* stitch) {
     std::vector<uint8_t> bytes;
     auto out = io::OutputStream::ToMemory(&bytes);
-    WritePngPage(view, atlas, page, tone, *out);
+    WritePngPage(view, atlas, page, tone, stitch, *out);
     out->Commit();
     return bytes;
+}
+
+std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& atlas,
+                                           MapContent content) {
+    if (view.seams.empty())
+        return nullptr;
+    TexelStitchStats s;
+    auto stitch = std::make_unique<TexelStitch>(StitchTexels(view, atlas, content, &s));
+    spdlog::info("{} seams: {} texels, {} samples, bilinear mismatch rms {:.4g} -> {:.4g} ({} "
+                 "iterations)",
+                 content == MapContent::Radiosity ? "light map" : "E map", s.texels, s.samples,
+                 s.rms_before, s.rms_after, s.iterations);
+    return stitch;
 }
 
 }  // namespace mebake::output

@@ -3,8 +3,10 @@
 // glossy display "three textures store the three components (x, y, z) in R, G, B").
 //
 // Every texel of a chart's square is shaded at its centre with the tile's full-resolution
-// normal and albedo (bake_view.h ChartShader::AtUv); gutter texels repeat the nearest
-// border texel; texels outside every chart are 0. Pages are computed shelf by shelf, a
+// normal and albedo (bake_view.h ChartShader::AtUv); the texels a viewer's bilinear filter
+// reads along chart seams are then solved to agree across them (texel_stitch.h, when the
+// view is stitched); gutter texels repeat the nearest border texel; texels outside every
+// chart are 0. Pages are computed shelf by shelf, a
 // group of charts (two per thread) at a time, and handed out in bands of rows, so memory
 // holds one shelf's rows and one group's tiles, not a page nor a whole shelf's tiles.
 //
@@ -25,6 +27,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -32,6 +35,8 @@
 namespace mebake::output {
 
 enum class MapContent { Radiosity, Irradiance };
+
+class TexelStitch;
 
 int MapChannels(MapContent content);
 std::vector<std::string> MapChannelNames(MapContent content);
@@ -42,16 +47,21 @@ using PageSink =
     std::function<void(std::span<const float> pixels, uint32_t first_row, uint32_t rows)>;
 
 // Computes one page and streams it to `sink` in bands of at most band_rows rows, holding
-// the tiles of `group` charts at a time (0: two per thread).
+// the tiles of `group` charts at a time (0: two per thread). Texels `stitch` has are taken
+// from it (nullptr: every texel as shaded).
 void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapContent content,
-                 const PageSink& sink, uint32_t band_rows = 64, size_t group = 0);
+                 const PageSink& sink, uint32_t band_rows = 64, size_t group = 0,
+                 const TexelStitch* stitch = nullptr);
+
+// The map value of chart point uv (MapChannels floats): B and A = 1, or E.
+void ShadeTexel(const ChartShader& shader, Vec2f uv, MapContent content, float* out);
 
 // Fills block rows [row_begin, row_end) of one chart's block (gutters included): `out`
 // points at texel (0, row_begin) of the block, rows `stride` floats apart, MapChannels
-// floats per texel. Exposed for tests.
+// floats per texel; texels `stitch` has are taken from it. Exposed for tests.
 void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
                     MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
-                    size_t stride);
+                    size_t stride, const TexelStitch* stitch = nullptr);
 
 // The file of page p: `path` itself for a one-page atlas, else UDIM-numbered
 // "name.<1001 + p>.ext" (page p = UDIM tile 1001 + p: u offset p % 10, v offset p / 10).
@@ -64,14 +74,20 @@ struct MapWriteOptions {
 };
 
 // Writes every page to PagePath(path, ...), as OpenEXR (".exr") or, for Radiosity, 8-bit
-// sRGB PNG (".png"). Returns the paths written. Throws Error(Usage) for another extension,
+// sRGB PNG (".png"), with the seams' texels stitched when the view is. Returns the paths
+// written. Throws Error(Usage) for another extension,
 // or for "-" with more than one page.
 std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
                                        const std::string& path, MapContent content,
                                        const MapWriteOptions& options);
 
-// The tone-mapped light map of one page as an encoded PNG (for embedding in a .glb).
+// The tone-mapped light map of one page as an encoded PNG (for embedding in a .glb), with
+// `stitch`'s texels (StitchTexels for MapContent::Radiosity; nullptr: as shaded).
 std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas, uint32_t page,
-                                       const ToneMap& tone);
+                                       const ToneMap& tone, const TexelStitch* stitch = nullptr);
+
+// The texel stitch of `content` for this view, or nullptr when the view is not stitched.
+std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& atlas,
+                                           MapContent content);
 
 }  // namespace mebake::output

@@ -44,7 +44,8 @@ ChartResult SampleChart(const BakeView& view, uint32_t c, const stream::ChartTil
                         int samples) {
     ChartResult r;
     const auto field = view.Field(c);
-    const ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c));
+    const ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c),
+                             view.Seams(c));
     for (const solve::QuadNode& n : field->nodes()) {
         if (!n.leaf())
             continue;

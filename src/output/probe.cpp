@@ -38,7 +38,7 @@ std::vector<ProbeValue> ProbeSolution(const BakeView& view, std::span<const Prob
         view, charts, stream::TileParts::Mesh,
         [&](uint32_t c, const stream::ChartTile& tile) {
             ChartShader shader(tile, view.solution.fields[c], view.solution.radiosity, view.scene,
-                               view.TilePath(c));
+                               view.TilePath(c), view.Seams(c));
             for (size_t k = first[c]; k < first[c + 1]; ++k) {
                 const uint32_t i = order[k];
                 const ProbeSite& s = sites[i];

@@ -73,7 +73,8 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
         tile = stream::ReadTile(path, stream::TileParts::Mesh);
         tile.grid = {};  // shading here needs triangles and barycentrics only
         shaders[size_t(c)] = std::make_unique<ChartShader>(
-            tile, view.solution.fields[size_t(c)], view.solution.radiosity, view.scene, path);
+            tile, view.solution.fields[size_t(c)], view.solution.radiosity, view.scene, path,
+            view.Seams(uint32_t(c)));
     });
     solve::VisibilityScene vis;
     std::vector<uint32_t> geom_chart;

@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "output/seam_graph.h"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +14,6 @@ namespace mebake::output {
 namespace {
 
 constexpr int kMaxSamples = 16;
-constexpr float kFoldCos = 0.7071f;  // 45 degrees
 
 float Luminance(const Vec3f& b) {
     return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z;
@@ -39,61 +39,29 @@ struct Waiting {
     Vec3f normal;
 };
 
-// The outline edges of a tile (used by one triangle of it) with B sampled along them.
+// The outline edges of a tile (seam_graph.h) with B sampled along them.
 std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
                                        const stream::ChartTile& tile, int samples) {
-    struct E {
-        uint32_t a, b, tri;
-    };
-    std::vector<E> edges;
-    edges.reserve(tile.triangles.size() * 3);
-    for (uint32_t t = 0; t < tile.triangles.size(); ++t)
-        for (int k = 0; k < 3; ++k) {
-            uint32_t a = tile.triangles[t][size_t(k)], b = tile.triangles[t][size_t((k + 1) % 3)];
-            if (a > b)
-                std::swap(a, b);
-            edges.push_back({a, b, t});
-        }
-    std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) {
-        return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.tri < y.tri;
-    });
     const auto field = view.Field(c);
-    ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c));
-    const uint64_t nv = view.manifest.vertex_count;
+    ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c),
+                       view.Seams(c));
     std::vector<EdgeSamples> out;
-    for (size_t i = 0; i < edges.size();) {
-        size_t j = i;
-        while (j < edges.size() && edges[j].a == edges[i].a && edges[j].b == edges[i].b)
-            ++j;
-        const E e = edges[i];
-        const bool outline = j - i == 1;
-        i = j;
-        if (!outline || e.a == e.b)
-            continue;
-        uint64_t ga = tile.vertex_id[e.a], gb = tile.vertex_id[e.b];
-        if (ga >= nv || gb >= nv || ga == gb)
-            continue;
-        uint32_t v0 = e.a, v1 = e.b;
-        if (ga > gb) {
-            std::swap(ga, gb);
-            std::swap(v0, v1);
-        }
-        const auto& tri = tile.triangles[e.tri];
-        const int i0 = int(std::find(tri.begin(), tri.end(), v0) - tri.begin());
-        const int i1 = int(std::find(tri.begin(), tri.end(), v1) - tri.begin());
+    for (const OutlineEdge& e : OutlineEdges(tile, view.manifest.vertex_count)) {
+        const auto& tri = tile.triangles[e.triangle];
+        const int i0 = int(std::find(tri.begin(), tri.end(), e.v0) - tri.begin());
+        const int i1 = int(std::find(tri.begin(), tri.end(), e.v1) - tri.begin());
         CHECK(i0 < 3 && i1 < 3);
         EdgeSamples s;
-        s.g0 = ga;
-        s.g1 = gb;
-        s.normal = Normalize(Cross(tile.position[tri[1]] - tile.position[tri[0]],
-                                   tile.position[tri[2]] - tile.position[tri[0]]));
+        s.g0 = e.g0;
+        s.g1 = e.g1;
+        s.normal = FaceNormal(tile, e.triangle);
         for (int k = 0; k < samples; ++k) {
             const float t = (float(k) + 0.5f) / float(samples);
             float b[3] = {0, 0, 0};
             b[i0] = 1 - t;
             b[i1] = t;
             s.y[size_t(k)] =
-                Luminance(shader.Radiosity(shader.AtTriangle(e.tri, b[0], b[1], b[2])));
+                Luminance(shader.Radiosity(shader.AtTriangle(e.triangle, b[0], b[1], b[2])));
         }
         out.push_back(s);
     }

@@ -64,7 +64,8 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
         view, AllCharts(view), stream::TileParts::Mesh,
         [&](uint32_t c, stream::ChartTile& tile) {
             const auto field = view.Field(c);
-            ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c));
+            ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c),
+                               view.Seams(c));
             TileColors tc;
             tc.radiosity.resize(tile.position.size());
             for (uint32_t v = 0; v < tile.position.size(); ++v)

@@ -212,7 +212,9 @@ TEST(ReferenceTest, BakeDirectoryReferenceAndProbe) {
     solve::testing::TinyBakeOptions opt;
     opt.light[0].b = Vec3f(1, 1, 1);
     solve::testing::WriteTinyBake(dir, opt);
-    const output::BakeView view = output::OpenBakeView(dir);
+    // The fields as written: the charts disagree at x = 1 (stitching is output's stitch_test).
+    const output::BakeView view =
+        output::OpenBakeView(dir, output::FieldLoading::All, output::SeamStitching::Off);
     const ReferenceMesh mesh = LoadReferenceMesh(dir, view.manifest);
     ASSERT_EQ(mesh.triangles.size(), 4u);
     auto points = ChooseReferencePoints(mesh, view.scene, 6, 2);

@@ -1,0 +1,277 @@
+#include "output/texel_stitch.h"
+
+#include "core/check.h"
+#include "output/seam_graph.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace mebake::output {
+
+namespace {
+
+constexpr double kSamplesPerTexel = 3;
+constexpr uint32_t kMaxSamplesPerEdge = 256;
+constexpr int kMaxIterations = 500;
+constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
+
+using Key = std::pair<uint64_t, uint64_t>;
+
+struct KeyHash {
+    size_t operator()(const Key& k) const {
+        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
+        h ^= h >> 31;
+        return size_t(h * 0xBF58476D1CE4E5B9ull);
+    }
+};
+
+Vec2d D(Vec2f v) {
+    return {double(v.x), double(v.y)};
+}
+
+uint64_t TexelKey(uint32_t chart, uint32_t texel) {
+    return (uint64_t(chart) << 32) | texel;
+}
+
+// The 2 x 2 texels a bilinear filter reads at chart point p (clamped as the gutter does),
+// with their weights.
+struct Footprint {
+    std::array<uint32_t, 4> texel;
+    std::array<double, 4> weight;
+};
+
+Footprint Bilinear(Vec2d p, uint32_t res) {
+    const double x = p.x * res - 0.5, y = p.y * res - 0.5;
+    const double fx = std::floor(x), fy = std::floor(y);
+    const double ax = x - fx, ay = y - fy;
+    auto clamp = [&](double v) {
+        return uint32_t(std::clamp(v, 0.0, double(res - 1)));
+    };
+    const uint32_t i0 = clamp(fx), i1 = clamp(fx + 1), j0 = clamp(fy), j1 = clamp(fy + 1);
+    return {{j0 * res + i0, j0 * res + i1, j1 * res + i0, j1 * res + i1},
+            {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay}};
+}
+
+struct EdgeSide {
+    uint32_t chart = 0;
+    Vec2f a, b;  // uv of g0, g1
+    Vec3f normal;
+};
+
+// A chart's outline edges and the texels their bilinear footprints read, as shaded.
+struct ChartPart {
+    std::vector<Key> keys;
+    std::vector<EdgeSide> sides;
+    std::vector<uint32_t> texels;  // sorted
+    std::vector<float> values;     // channels per texel
+};
+
+ChartPart PrepareChart(const BakeView& view, const Atlas& atlas, uint32_t c,
+                       const stream::ChartTile& tile, MapContent content) {
+    ChartPart part;
+    const uint32_t res = atlas.charts[c].resolution;
+    for (const OutlineEdge& e : OutlineEdges(tile, view.manifest.vertex_count)) {
+        EdgeSide s{c, tile.uv[e.v0], tile.uv[e.v1], FaceNormal(tile, e.triangle)};
+        // Footprints of points every 1/8 texel: every texel a seam sample can read (a sample
+        // reading one not listed here is dropped; it can only graze a texel corner).
+        const double len = Length(D(s.b) - D(s.a)) * res;
+        const int steps = int(std::ceil(8 * len)) + 1;
+        for (int k = 0; k <= steps; ++k) {
+            const double t = double(k) / steps;
+            const Footprint f = Bilinear(D(s.a) + (D(s.b) - D(s.a)) * t, res);
+            part.texels.insert(part.texels.end(), f.texel.begin(), f.texel.end());
+        }
+        part.keys.push_back({e.g0, e.g1});
+        part.sides.push_back(s);
+    }
+    std::sort(part.texels.begin(), part.texels.end());
+    part.texels.erase(std::unique(part.texels.begin(), part.texels.end()), part.texels.end());
+    if (part.texels.empty())
+        return part;
+    const auto field = view.Field(c);
+    const ChartShader shader(tile, *field, view.solution.radiosity, view.scene, view.TilePath(c),
+                             view.Seams(c));
+    const size_t nc = size_t(MapChannels(content));
+    part.values.resize(part.texels.size() * nc);
+    const uint32_t g = atlas.gutter;
+    for (size_t k = 0; k < part.texels.size(); ++k) {
+        const uint32_t i = part.texels[k] % res, j = part.texels[k] / res;
+        ShadeTexel(shader, atlas.TexelUv(c, i + g, j + g), content, &part.values[k * nc]);
+    }
+    return part;
+}
+
+// Rows of A: 8 (unknown, weight) entries per seam sample, B's weights negated.
+struct SeamRows {
+    std::vector<uint32_t> index;
+    std::vector<double> weight;
+    size_t rows() const { return index.size() / 8; }
+};
+
+// y = (I + lambda A^T A) x.
+void ApplyNormal(const SeamRows& a, const std::vector<double>& x, std::vector<double>& y) {
+    y = x;
+    for (size_t r = 0; r < a.rows(); ++r) {
+        double ax = 0;
+        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
+            ax += a.weight[k] * x[a.index[k]];
+        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
+            y[a.index[k]] += kSeamWeight * a.weight[k] * ax;
+    }
+}
+
+// Preconditioned conjugate gradients for (I + lambda A^T A) x = b from x = b; returns the
+// iterations.
+int SolveChannel(const SeamRows& a, const std::vector<double>& diag, const std::vector<double>& b,
+                 std::vector<double>& x) {
+    const size_t n = b.size();
+    x = b;
+    std::vector<double> r(n), z(n), p(n), q(n);
+    ApplyNormal(a, x, q);
+    double bnorm = 0, rz = 0;
+    for (size_t i = 0; i < n; ++i) {
+        r[i] = b[i] - q[i];
+        z[i] = r[i] / diag[i];
+        p[i] = z[i];
+        rz += r[i] * z[i];
+        bnorm += b[i] * b[i];
+    }
+    const double stop = kTolerance * kTolerance * std::max(bnorm, 1e-300);
+    int it = 0;
+    for (; it < kMaxIterations; ++it) {
+        double rr = 0;
+        for (size_t i = 0; i < n; ++i)
+            rr += r[i] * r[i];
+        if (rr <= stop)
+            break;
+        ApplyNormal(a, p, q);
+        double pq = 0;
+        for (size_t i = 0; i < n; ++i)
+            pq += p[i] * q[i];
+        if (!(pq > 0))
+            break;
+        const double alpha = rz / pq;
+        double rz_next = 0;
+        for (size_t i = 0; i < n; ++i) {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+            z[i] = r[i] / diag[i];
+            rz_next += r[i] * z[i];
+        }
+        const double beta = rz_next / rz;
+        rz = rz_next;
+        for (size_t i = 0; i < n; ++i)
+            p[i] = z[i] + beta * p[i];
+    }
+    return it;
+}
+
+double MismatchSquares(const SeamRows& a, const std::vector<double>& x) {
+    double sum = 0;
+    for (size_t r = 0; r < a.rows(); ++r) {
+        double ax = 0;
+        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
+            ax += a.weight[k] * x[a.index[k]];
+        sum += ax * ax;
+    }
+    return sum;
+}
+
+}  // namespace
+
+const float* TexelStitch::Find(uint32_t chart, uint32_t i, uint32_t j) const {
+    if (index_.empty() || chart >= resolution_.size())
+        return nullptr;
+    const auto it = index_.find(TexelKey(chart, j * resolution_[chart] + i));
+    return it == index_.end() ? nullptr : &values_[size_t(it->second) * size_t(channels_)];
+}
+
+TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
+                         TexelStitchStats* stats) {
+    TexelStitch st;
+    st.channels_ = MapChannels(content);
+    const size_t nc = size_t(st.channels_);
+    // Radiosity maps stitch R, G, B (A stays 1).
+    const size_t solved = content == MapContent::Radiosity ? 3 : nc;
+    for (const AtlasChart& ac : atlas.charts)
+        st.resolution_.push_back(ac.resolution);
+    std::unordered_map<Key, EdgeSide, KeyHash> waiting;
+    SeamRows rows;
+    auto add_pair = [&](const EdgeSide& x, const EdgeSide& y) {
+        const uint32_t rx = st.resolution_[x.chart], ry = st.resolution_[y.chart];
+        const double len = std::max(Length(D(x.b) - D(x.a)) * rx, Length(D(y.b) - D(y.a)) * ry);
+        const uint32_t n = uint32_t(
+            std::clamp(std::ceil(kSamplesPerTexel * len), 1.0, double(kMaxSamplesPerEdge)));
+        for (uint32_t k = 0; k < n; ++k) {
+            const double t = (k + 0.5) / n;
+            const Footprint fx = Bilinear(D(x.a) + (D(x.b) - D(x.a)) * t, rx);
+            const Footprint fy = Bilinear(D(y.a) + (D(y.b) - D(y.a)) * t, ry);
+            std::array<uint32_t, 8> idx;
+            bool found = true;
+            for (int m = 0; m < 8 && found; ++m) {
+                const auto it = st.index_.find(m < 4 ? TexelKey(x.chart, fx.texel[size_t(m)])
+                                                     : TexelKey(y.chart, fy.texel[size_t(m - 4)]));
+                found = it != st.index_.end();
+                if (found)
+                    idx[size_t(m)] = it->second;
+            }
+            if (!found)
+                continue;
+            rows.index.insert(rows.index.end(), idx.begin(), idx.end());
+            for (int m = 0; m < 8; ++m)
+                rows.weight.push_back(m < 4 ? fx.weight[size_t(m)] : -fy.weight[size_t(m - 4)]);
+        }
+    };
+    ForEachTile(
+        view, AllCharts(view), stream::TileParts::Mesh,
+        [&](uint32_t c, stream::ChartTile& tile) {
+            return PrepareChart(view, atlas, c, tile, content);
+        },
+        [&](uint32_t c, stream::ChartTile&, ChartPart& part) {
+            const size_t first = st.values_.size() / nc;
+            for (size_t k = 0; k < part.texels.size(); ++k)
+                st.index_.emplace(TexelKey(c, part.texels[k]), uint32_t(first + k));
+            st.values_.insert(st.values_.end(), part.values.begin(), part.values.end());
+            for (size_t i = 0; i < part.sides.size(); ++i) {
+                auto it = waiting.find(part.keys[i]);
+                if (it == waiting.end()) {
+                    waiting.emplace(part.keys[i], part.sides[i]);
+                    continue;
+                }
+                if (it->second.chart == c)
+                    continue;  // a split vertex inside one chart
+                if (Dot(it->second.normal, part.sides[i].normal) >= kFoldCos)
+                    add_pair(it->second, part.sides[i]);
+                waiting.erase(it);
+            }
+        });
+    waiting.clear();
+    const size_t n = st.values_.size() / nc;
+    std::vector<double> diag(n, 1.0);
+    for (size_t k = 0; k < rows.index.size(); ++k)
+        diag[rows.index[k]] += kSeamWeight * rows.weight[k] * rows.weight[k];
+    TexelStitchStats s;
+    s.texels = n;
+    s.samples = rows.rows();
+    double before = 0, after = 0;
+    std::vector<double> b(n), x;
+    for (size_t ch = 0; ch < solved && !rows.index.empty(); ++ch) {
+        for (size_t i = 0; i < n; ++i)
+            b[i] = st.values_[i * nc + ch];
+        before += MismatchSquares(rows, b);
+        s.iterations = std::max(s.iterations, SolveChannel(rows, diag, b, x));
+        after += MismatchSquares(rows, x);
+        for (size_t i = 0; i < n; ++i)  // B >= 0; E is signed
+            st.values_[i * nc + ch] =
+                content == MapContent::Radiosity ? std::max(0.f, float(x[i])) : float(x[i]);
+    }
+    const double count = double(std::max<size_t>(1, rows.rows() * solved));
+    s.rms_before = std::sqrt(before / count);
+    s.rms_after = std::sqrt(after / count);
+    if (stats)
+        *stats = s;
+    return st;
+}
+
+}  // namespace mebake::output

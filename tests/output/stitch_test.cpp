@@ -1,0 +1,449 @@
+// Stitching across chart borders (seam_graph.h, seam_stitch.h, texel_stitch.h) on a plane
+// split into a grid of charts with a closed-form field E_z = a + bx x + by y. Each chart's
+// fitted field is off by its own offset (as independent fits are), so the charts disagree
+// along every border. Asserted: the shown field is one value from both sides of every
+// border (shader, vertex copies, render), a viewer's bilinear filtering of the light map
+// agrees across every seam, and stitching keeps exact fields exact and moves a perturbed one
+// no farther from the closed form than the perturbation.
+#include "core/parallel.h"
+#include "output/lightmap.h"
+#include "output/render.h"
+#include "output/seam_graph.h"
+#include "output/seams.h"
+#include "output/texel_stitch.h"
+#include "support/bake_fixture.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+namespace mebake::output {
+namespace {
+
+using solve::testing::kAlbedo;
+
+struct GridOptions {
+    int kx = 3, ky = 2;          // charts along x and y, each a unit square
+    int m = 3;                   // quads per chart side (2 triangles each)
+    uint32_t resolution = 16;    // texels per chart side
+    float inset = 0.125f;        // uv = inset + span (x - cx): a virtual part around the chart
+    Vec3f a{2, 4, 6};            // E_z at the origin per colour
+    float bx = 0.6f, by = 0.3f;  // gradient of E_z
+    std::vector<float> offset;   // per chart, added to its fitted E_z (all colours)
+    float tilt = 0;              // odd charts' vertex normals (tilt, 0, 1): per-chart normals
+};
+
+float Span(const GridOptions& o) {
+    return 1 - 2 * o.inset;
+}
+
+// Closed-form B at world (x, y) for colour k.
+double ExactB(const GridOptions& o, double x, double y, int k) {
+    return kAlbedo * (o.a[k] + o.bx * x + o.by * y);
+}
+
+// Writes a solved bake of the grid (order 1 fields, subdivided once: continuous leaves).
+void WriteGridBake(const std::string& dir, const GridOptions& o) {
+    namespace fs = std::filesystem;
+    fs::create_directories(dir + "/tiles");
+    fs::create_directories(dir + "/solve");
+    const int cols = o.kx * o.m + 1, rows = o.ky * o.m + 1;
+    const uint64_t nv = uint64_t(cols) * rows;
+    auto lattice = [&](int c, int r) {
+        return Vec3f(float(c) / o.m, float(r) / o.m, 0);
+    };
+    stream::Manifest man;
+    man.state = "ingested";
+    stream::InputRecord in;
+    in.path = "grid.ply";
+    in.vertices = nv;
+    in.triangles = uint64_t(2 * o.m * o.m * o.kx * o.ky);
+    man.inputs.push_back(in);
+    man.texel_size = 1.0 / (Span(o) * o.resolution);
+    man.vertex_count = nv;
+    man.face_count = in.triangles;
+    man.bbox_min = Vec3d(0, 0, 0);
+    man.bbox_max = Vec3d(o.kx, o.ky, 0);
+    man.surface_area = double(o.kx * o.ky);
+    man.brick_count = 1;
+    std::vector<solve::ChartField> fields;
+    const float span = Span(o);
+    const uint32_t res = o.resolution;
+    for (int cy = 0; cy < o.ky; ++cy)
+        for (int cx = 0; cx < o.kx; ++cx) {
+            const uint32_t c = uint32_t(cy * o.kx + cx);
+            stream::ChartTile t;
+            for (int r = 0; r <= o.m; ++r)
+                for (int q = 0; q <= o.m; ++q) {
+                    const int gc = cx * o.m + q, gr = cy * o.m + r;
+                    const Vec3f p = lattice(gc, gr);
+                    t.position.push_back(p);
+                    t.normal.push_back(Normalize(Vec3f(c % 2 ? o.tilt : 0.f, 0, 1)));
+                    t.uv.push_back(Vec2f(o.inset + span * (p.x - float(cx)),
+                                         o.inset + span * (p.y - float(cy))));
+                    t.vertex_id.push_back(uint64_t(gr) * uint64_t(cols) + uint64_t(gc));
+                }
+            const uint32_t w = uint32_t(o.m + 1);
+            for (uint32_t r = 0; r < uint32_t(o.m); ++r)
+                for (uint32_t q = 0; q < uint32_t(o.m); ++q) {
+                    const uint32_t v00 = r * w + q, v10 = v00 + 1, v01 = v00 + w, v11 = v01 + 1;
+                    t.triangles.push_back({v00, v10, v11});
+                    t.triangles.push_back({v00, v11, v01});
+                }
+            for (size_t k = 0; k < t.triangles.size(); ++k) {
+                t.face_id.push_back(c * 1000 + k);
+                t.material.push_back(0);
+            }
+            const int g = stream::DefaultGridResolution(t.triangles.size());
+            t.grid = stream::BuildChartGrid(t.uv, t.triangles, g);
+            t.geometry.resolution = res;
+            int levels = 0;
+            while ((1u << levels) < res)
+                ++levels;
+            t.geometry.levels.resize(size_t(levels) + 1);
+            auto& fine = t.geometry.levels.back();
+            fine.resize(size_t(res) * res);
+            for (uint32_t j = 0; j < res; ++j)
+                for (uint32_t i = 0; i < res; ++i) {
+                    auto& tx = fine[size_t(j) * res + i];
+                    tx.position = Vec3f(float(cx) + ((i + 0.5f) / res - o.inset) / span,
+                                        float(cy) + ((j + 0.5f) / res - o.inset) / span, 0);
+                    tx.normal = Vec3f(0, 0, 1);
+                    tx.vis_point = tx.position;
+                    tx.color = Vec3f(-1, -1, -1);
+                    tx.area = 1.f / float(res * res);
+                    tx.coverage = 1;
+                    tx.radius = 1.f / float(res);
+                    tx.material = 0;
+                }
+            t.geometry.BuildPyramid();
+            t.meta.chart = c;
+            t.meta.vertex_count = uint32_t(t.position.size());
+            t.meta.triangle_count = uint32_t(t.triangles.size());
+            t.meta.resolution = res;
+            t.meta.grid_resolution = uint32_t(g);
+            t.meta.scale = 1;
+            t.meta.area = 1;
+            t.meta.bbox_min = Vec3f(float(cx), float(cy), 0);
+            t.meta.bbox_max = Vec3f(float(cx + 1), float(cy + 1), 0);
+            stream::WriteTile(stream::TilePath(dir, c), t);
+            stream::ChartRecord rec;
+            rec.triangles = t.meta.triangle_count;
+            rec.vertices = t.meta.vertex_count;
+            rec.resolution = res;
+            rec.scale = 1;
+            rec.area = 1;
+            rec.bbox_min = t.meta.bbox_min;
+            rec.bbox_max = t.meta.bbox_max;
+            man.charts.push_back(rec);
+
+            // E_z in chart coordinates: A + Bu u + Bv v, as Legendre coefficients on the root.
+            solve::ChartField f(1, 9);
+            const int n = solve::NumCoeffs(1);
+            const double bu = o.bx / span, bv = o.by / span;
+            const float off = c < o.offset.size() ? o.offset[c] : 0.f;
+            for (int k = 0; k < 3; ++k) {
+                const double a0 =
+                    o.a[k] + o.bx * (cx - o.inset / span) + o.by * (cy - o.inset / span) + off;
+                float* z = f.value(0) + (3 * k + 2) * n;
+                z[0] = float(a0 + bu / 2 + bv / 2);
+                z[solve::CoeffIndex(1, 1, 0)] = float(bu / (2 * std::sqrt(3.0)));
+                z[solve::CoeffIndex(1, 0, 1)] = float(bv / (2 * std::sqrt(3.0)));
+            }
+            const size_t nodes = f.node_count();
+            for (size_t k = 0; k < nodes; ++k)
+                f.Subdivide(k);
+            fields.push_back(std::move(f));
+        }
+    stream::WriteManifest(dir, man);
+    {
+        DiskArray<Vec3f> v(stream::Spill::VerticesPath(dir), true, 1 << 16);
+        for (int r = 0; r < rows; ++r)
+            for (int q = 0; q < cols; ++q)
+                v.Push(lattice(q, r));
+        v.Flush();
+    }
+    solve::WriteSolution(solve::SolutionPath(dir), fields, false);
+    std::ofstream(dir + "/solve/scene.json")
+        << R"({"materials": [{"albedo": 0.5, "use_vertex_colors": false}],
+              "sky": {"type": "uniform", "radiance": [0.1, 0.2, 0.3]}})";
+}
+
+// Chart of world point (x, y) and its uv there.
+struct ChartPoint {
+    uint32_t chart;
+    Vec2f uv;
+};
+
+ChartPoint Locate(const GridOptions& o, int cx, int cy, double x, double y) {
+    return {uint32_t(cy * o.kx + cx),
+            Vec2f(float(o.inset + Span(o) * (x - cx)), float(o.inset + Span(o) * (y - cy)))};
+}
+
+// A seam point: world (x, y) on the border of charts (cx0, cy0) and (cx1, cy1).
+struct SeamPoint {
+    double x, y;
+    int cx0, cy0, cx1, cy1;
+};
+
+std::vector<SeamPoint> SeamPoints(const GridOptions& o, int per_unit) {
+    std::vector<SeamPoint> pts;
+    for (int k = 0; k < per_unit; ++k) {
+        const double s = (k + 0.37) / per_unit;  // off the lattice's vertices
+        for (int cy = 0; cy < o.ky; ++cy)
+            for (int cx = 0; cx + 1 < o.kx; ++cx)
+                pts.push_back({double(cx + 1), cy + s, cx, cy, cx + 1, cy});
+        for (int cy = 0; cy + 1 < o.ky; ++cy)
+            for (int cx = 0; cx < o.kx; ++cx)
+                pts.push_back({cx + s, double(cy + 1), cx, cy, cx, cy + 1});
+    }
+    return pts;
+}
+
+class StitchTest : public ::testing::Test {
+protected:
+    void SetUp() override { dir_ = solve::testing::FreshDir("stitch"); }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+
+    // Per-chart shaders of a view (tiles and fields kept by the fixture).
+    void LoadShaders(const BakeView& view) {
+        const size_t n = view.chart_count();
+        tiles_.assign(n, {});
+        shaders_.clear();
+        for (uint32_t c = 0; c < n; ++c)
+            tiles_[c] = stream::ReadTile(view.TilePath(c), stream::TileParts::Mesh);
+        for (uint32_t c = 0; c < n; ++c)
+            shaders_.push_back(std::make_unique<ChartShader>(tiles_[c], view.solution.fields[c],
+                                                             view.solution.radiosity, view.scene,
+                                                             view.TilePath(c), view.Seams(c)));
+    }
+    Vec3f B(const ChartPoint& p) const {
+        return shaders_[p.chart]->Radiosity(shaders_[p.chart]->AtUv(p.uv));
+    }
+
+    // The light map (one page) as a viewer filters it bilinearly at chart point uv.
+    Vec3f Filtered(const Atlas& atlas, const std::vector<float>& page, const ChartPoint& p) const {
+        const AtlasChart& ac = atlas.charts[p.chart];
+        const uint32_t w = atlas.pages[0].width;
+        const double x = ac.x + atlas.gutter + double(p.uv.x) * ac.resolution - 0.5;
+        const double y = ac.y + atlas.gutter + double(p.uv.y) * ac.resolution - 0.5;
+        const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+        const double fx = x - x0, fy = y - y0;
+        Vec3f out{};
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) {
+                const float* px = &page[(size_t(y0 + dy) * w + size_t(x0 + dx)) * 4];
+                const float wgt = float((dx ? fx : 1 - fx) * (dy ? fy : 1 - fy));
+                out += Vec3f(px[0], px[1], px[2]) * wgt;
+            }
+        return out;
+    }
+
+    std::vector<float> Page(const BakeView& view, const Atlas& atlas) const {
+        const auto stitch = StitchForView(view, atlas, MapContent::Radiosity);
+        std::vector<float> page(size_t(atlas.pages[0].width) * atlas.pages[0].height * 4);
+        ComputePage(
+            view, atlas, 0, MapContent::Radiosity,
+            [&](std::span<const float> px, uint32_t first, uint32_t) {
+                std::copy(px.begin(), px.end(),
+                          page.begin() + ptrdiff_t(first) * atlas.pages[0].width * 4);
+            },
+            64, 0, stitch.get());
+        return page;
+    }
+
+    // Largest relative step of the filtered light map across the seams.
+    double WorstFilteredStep(const GridOptions& o, const BakeView& view) const {
+        const Atlas atlas = PackAtlas(ChartResolutions(view));
+        EXPECT_EQ(atlas.pages.size(), 1u);
+        const std::vector<float> page = Page(view, atlas);
+        double worst = 0;
+        for (const SeamPoint& s : SeamPoints(o, 40)) {
+            const Vec3f b0 = Filtered(atlas, page, Locate(o, s.cx0, s.cy0, s.x, s.y));
+            const Vec3f b1 = Filtered(atlas, page, Locate(o, s.cx1, s.cy1, s.x, s.y));
+            for (int k = 0; k < 3; ++k)
+                worst = std::max(worst, std::abs(double(b0[k] - b1[k])) / ExactB(o, s.x, s.y, k));
+        }
+        return worst;
+    }
+
+    std::string dir_;
+    std::vector<stream::ChartTile> tiles_;
+    std::vector<std::unique_ptr<ChartShader>> shaders_;
+};
+
+GridOptions Perturbed() {
+    GridOptions o;
+    o.offset = {0.3f, -0.25f, 0.2f, -0.3f, 0.15f, 0.f};  // 5-15 % of E_z
+    return o;
+}
+
+TEST_F(StitchTest, ExactFieldStaysExact) {
+    const GridOptions o;
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    SeamGraphStats gs;
+    BuildSeamStitch(view, &gs);
+    EXPECT_EQ(gs.stitched_edges, uint64_t(o.m * ((o.kx - 1) * o.ky + o.kx * (o.ky - 1))));
+    EXPECT_EQ(gs.fold_edges, 0u);
+    LoadShaders(view);
+    for (int cy = 0; cy < o.ky; ++cy)
+        for (int cx = 0; cx < o.kx; ++cx)
+            for (double fy : {0.0, 0.01, 0.3, 0.99, 1.0})
+                for (double fx : {0.0, 0.02, 0.5, 0.98, 1.0}) {
+                    const Vec3f b = B(Locate(o, cx, cy, cx + fx, cy + fy));
+                    for (int k = 0; k < 3; ++k)
+                        EXPECT_NEAR(b[k], ExactB(o, cx + fx, cy + fy, k), 1e-5 * b[k]);
+                }
+    // The filtered light map is within bilinear interpolation of a linear field: exact.
+    EXPECT_LT(WorstFilteredStep(o, view), 1e-5);
+}
+
+TEST_F(StitchTest, BordersShowOneValue) {
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;  // and neighbouring charts' vertex normals differ by 17 degrees
+    WriteGridBake(dir_, o);
+    const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
+    const BakeView view = OpenBakeView(dir_);
+    for (const BakeView* v : {&raw, &view}) {
+        LoadShaders(*v);
+        double worst = 0;
+        for (const SeamPoint& s : SeamPoints(o, 25)) {
+            const Vec3f b0 = B(Locate(o, s.cx0, s.cy0, s.x, s.y));
+            const Vec3f b1 = B(Locate(o, s.cx1, s.cy1, s.x, s.y));
+            for (int k = 0; k < 3; ++k)
+                worst = std::max(worst, std::abs(double(b0[k] - b1[k])) / ExactB(o, s.x, s.y, k));
+        }
+        if (v == &raw) {
+            EXPECT_GT(worst, 0.05);  // the perturbation shows
+        } else {
+            EXPECT_LT(worst, 1e-5);
+        }
+    }
+    // The seam metric (B at points of every border edge with each side's own attributes).
+    SeamOptions so;
+    so.samples = 16;
+    EXPECT_GT(MeasureSeams(raw, so).display.max, 0.01);
+    const SeamStats s = MeasureSeams(view, so);
+    EXPECT_EQ(s.seam_edges, uint64_t(o.m * ((o.kx - 1) * o.ky + o.kx * (o.ky - 1))));
+    EXPECT_LT(s.max_relative, 1e-5);
+    EXPECT_LT(s.display.max, 1e-5);
+}
+
+TEST_F(StitchTest, StitchingStaysWithinThePerturbation) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    LoadShaders(view);
+    // Band: at most 6 texels of the chart square.
+    const double band = 6.0 / o.resolution / Span(o);
+    for (int cy = 0; cy < o.ky; ++cy)
+        for (int cx = 0; cx < o.kx; ++cx) {
+            const float off = o.offset[size_t(cy * o.kx + cx)];
+            for (int j = 0; j <= 20; ++j)
+                for (int i = 0; i <= 20; ++i) {
+                    const double x = cx + i / 20.0, y = cy + j / 20.0;
+                    const Vec3f b = B(Locate(o, cx, cy, x, y));
+                    // Near a border: between the charts' own values (|offset| <= 0.3).
+                    for (int k = 0; k < 3; ++k)
+                        EXPECT_LE(std::abs(b[k] - ExactB(o, x, y, k)), kAlbedo * 0.3 + 1e-5);
+                    // Beyond every band: the chart's own fit, untouched.
+                    const bool bordered =
+                        (x - cx < band && cx > 0) || (cx + 1 - x < band && cx + 1 < o.kx) ||
+                        (y - cy < band && cy > 0) || (cy + 1 - y < band && cy + 1 < o.ky);
+                    if (bordered)
+                        continue;
+                    for (int k = 0; k < 3; ++k)
+                        EXPECT_NEAR(b[k], ExactB(o, x, y, k) + kAlbedo * off, 1e-5);
+                }
+        }
+}
+
+TEST_F(StitchTest, LightMapFilteredAcrossSeamsAgrees) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    // Unstitched the filtered step is the perturbation (5-15 %); stitched, the least-squares
+    // texels leave a residue of the seam weight's order (lambda = 100: about 1 %), then
+    // bilinear interpolation of the stitched field adds nothing for a linear field.
+    const double raw =
+        WorstFilteredStep(o, OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off));
+    const double stitched = WorstFilteredStep(o, OpenBakeView(dir_));
+    EXPECT_GT(raw, 0.05);
+    EXPECT_LT(stitched, 0.005);
+}
+
+TEST_F(StitchTest, VertexCopiesAgree) {
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    LoadShaders(view);
+    // Every copy of a global vertex (one per chart using it) shades to the same B, so the
+    // vertex colour, their mean, is that value.
+    std::map<uint64_t, std::vector<Vec3f>> copies;
+    for (uint32_t c = 0; c < tiles_.size(); ++c)
+        for (uint32_t v = 0; v < tiles_[c].vertex_id.size(); ++v)
+            copies[tiles_[c].vertex_id[v]].push_back(
+                shaders_[c]->Radiosity(shaders_[c]->AtVertex(v)));
+    int shared = 0;
+    for (const auto& [id, bs] : copies) {
+        shared += bs.size() > 1;
+        for (const Vec3f& b : bs)
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(b[k], bs[0][k], 1e-5 * bs[0][k]) << "vertex " << id;
+    }
+    EXPECT_EQ(shared, (o.kx - 1) * (o.ky * o.m + 1) + (o.ky - 1) * (o.kx * o.m + 1) -
+                          (o.kx - 1) * (o.ky - 1));
+}
+
+TEST_F(StitchTest, RenderShowsNoStepAtBorders) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    RenderOptions ro;
+    ro.camera.eye = Vec3d(1.5, 1, 4);
+    ro.camera.target = Vec3d(1.5, 1, 0);
+    ro.camera.up = Vec3d(0, 1, 0);
+    ro.camera.fov = 45;
+    ro.camera.width = 160;
+    ro.camera.height = 120;
+    ro.background = Vec3f(0, 0, 0);
+    // The largest step between horizontally neighbouring pixels both on the plane, relative.
+    auto worst_step = [&](const BakeView& v) {
+        const RenderedImage img = Render(v, ro);
+        double worst = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x + 1 < img.width; ++x) {
+                const Vec3f p = img.At(x, y), q = img.At(x + 1, y);
+                if (p.x <= 0 || q.x <= 0)
+                    continue;
+                worst = std::max(worst, std::abs(double(p.y - q.y)) / double(p.y));
+            }
+        return worst;
+    };
+    const double raw = worst_step(OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off));
+    const double stitched = worst_step(OpenBakeView(dir_));
+    // A pixel spans about 0.024 world units: the closed form's gradient moves B by < 0.5 %
+    // per pixel; the bands (<= 6 texels, ~0.5 world units) spread a 15 % offset over ~20
+    // pixels each side.
+    EXPECT_GT(raw, 0.05);
+    EXPECT_LT(stitched, 0.02);
+}
+
+TEST_F(StitchTest, SameForAnyThreadCount) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    std::vector<float> pages[2];
+    for (int threads : {1, 2}) {
+        ThreadLimit limit(threads);
+        const BakeView view = OpenBakeView(dir_, FieldLoading::OnDemand);
+        const Atlas atlas = PackAtlas(ChartResolutions(view));
+        pages[threads - 1] = Page(view, atlas);
+    }
+    EXPECT_EQ(pages[0], pages[1]);
+}
+
+}  // namespace
+}  // namespace mebake::output
