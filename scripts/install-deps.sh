@@ -10,6 +10,7 @@ PKGS=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-14 libclang-rt-14-dev
   time openexr
+  tmux  # tests/e2e/progress_tmux_test.cpp: progress lines as a terminal shows them
 )
 
 missing=()

@@ -12,6 +12,7 @@
 #include "app/reference_commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "io/mesh_format.h"
 
 namespace {
@@ -45,10 +46,17 @@ int main(int argc, char** argv) {
         "mebake"};
     app.set_version_flag("--version", std::string("mebake ") + MEBAKE_VERSION);
     app.require_subcommand(1);
+    app.fallthrough();  // global options (-q, --progress) may also follow the command
     int verbosity = 0;
     app.add_flag("-v,--verbose", verbosity, "More detail on stderr (repeat for trace)");
     bool quiet = false;
     app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+    std::string progress = "auto";
+    app.add_option("--progress", progress,
+                   "Progress of long stages on stderr: auto (a line redrawn on a terminal, a "
+                   "log line every 5 s otherwise), plain, json (one object per line), off")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "plain", "json", "off"}));
 
     // info
     mebake::app::InfoOptions info;
@@ -258,6 +266,7 @@ int main(int argc, char** argv) {
 
     mebake::InitLogging(quiet ? -1 : verbosity);
     try {
+        mebake::SetProgressMode(mebake::ParseProgressMode(progress, quiet));
         if (*info_cmd) {
             info.format = ToFormat(info_format);
             return mebake::app::RunInfo(info);

@@ -3,6 +3,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "io/png_writer.h"
 #include "solve/visibility.h"
 
@@ -112,6 +113,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const int k = opt.samples;
     const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
     std::vector<uint64_t> row_hits(size_t(cam.height), 0);
+    ProgressStage progress("render", uint64_t(cam.height), "rows");
     ParallelFor(0, cam.height, [&](int64_t py) {
         std::vector<solve::Segment> segs(per_row);
         std::vector<solve::Hit> hits(per_row);
@@ -155,7 +157,9 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 out[c] = sum[c] * weight;
         }
         row_hits[size_t(py)] = count;
+        progress.Add();
     });
+    progress.Finish();
     img.rays = uint64_t(per_row) * uint64_t(cam.height);
     for (uint64_t h : row_hits)
         img.hits += h;
