@@ -11,6 +11,7 @@
 #include "io/mesh_format.h"
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
+#include "stream/ground.h"
 #include "stream/proxy_cluster.h"
 #include "stream/spill.h"
 
@@ -206,6 +207,12 @@ Manifest Ingest(const IngestOptions& opt) {
             before += in->offset();
         }
         progress.Finish();
+        m.object_bbox_min = spill.result().bbox_min;
+        m.object_bbox_max = spill.result().bbox_max;
+        if (opt.ground && spill.result().face_count > 0) {
+            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, spill.BeginInput(kGroundSource));
+            m.ground = true;
+        }
         sr = spill.Finish();
     }
     for (const auto& in : sr.inputs) {
@@ -251,10 +258,16 @@ Manifest Ingest(const IngestOptions& opt) {
     m.brick_faces = bopt.max_faces;
     m.brick_count = uint32_t(plan.bricks.size());
     m.surface_area = plan.surface_area;
+    // The ground takes no light-map resolution from the scans: the texel size follows from
+    // their area alone (the atlas grows by the ground's share).
+    const double texel_area =
+        m.ground ? std::max(plan.surface_area - GroundPlaneArea(m.object_bbox_min, m.object_bbox_max),
+                            1e-3 * plan.surface_area)
+                 : plan.surface_area;
     m.texel_size = opt.texel_size > 0
                        ? opt.texel_size
-                       : std::sqrt(plan.surface_area / (0.5 * double(opt.lightmap_resolution) *
-                                                        opt.lightmap_resolution));
+                       : std::sqrt(texel_area / (0.5 * double(opt.lightmap_resolution) *
+                                                 opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
     spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
                  plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
