@@ -200,7 +200,7 @@ int main(int argc, char** argv) {
         "render", "Render a view of the baked lighting (pinhole camera, full-resolution mesh).");
     ren_cmd->add_option("dir", ren.dir, "Solved bake directory")->required();
     ren_cmd->add_option("-o,--output", ren.output, "Image: .exr (linear radiance) or .png (tone-mapped); '-' = EXR on stdout")->required();
-    ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a three-quarter view from the key light's side, the object filling 90 % of the frame)")->expected(3)->delimiter(',');
+    ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a three-quarter view from the key light's side, the object filling 85 % of the frame)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--up", ren.up, "Up direction x y z (default: the scene's up)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--fov", ren.fov, "Vertical field of view, degrees")->capture_default_str()
@@ -226,7 +226,7 @@ int main(int argc, char** argv) {
                 "'-o -' streams the\nvertex-coloured PLY to stdout.\n"
                 "Defaults without --scene: a uniform sky and a key area light from the right, 40 "
                 "degrees up\n(key : sky about 3 : 1); OUT/render.png looks from a three-quarter "
-                "view on the key's\nside with the object filling about 90 % of the frame.");
+                "view on the key's\nside with the object filling about 85 % of the frame.");
     bk_cmd->add_option("inputs", bk.inputs, "Mesh files, or '-' for stdin")->required();
     bk_cmd->add_option("-o,--output", bk.output, "Output directory, or '-' for stdout")->required();
     bk_cmd->add_option("--format", bk_format, "Format of stdin")->check(kFormatName);

@@ -73,12 +73,12 @@ Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
     side = Normalize(Cross(up, front));
     const Vec3d dir = Normalize(front * 1.0 + side * 0.75 + up * 0.4);  // towards the eye
     const Vec3d right = Normalize(Cross(-dir, up)), cam_up = Cross(right, -dir);
-    // The distance at which every vertex of the object projects inside 90 % of the frame
+    // The distance at which every vertex of the object projects inside 85 % of the frame
     // (tighter than its bounding sphere, which leaves a round object at half the frame).
     // A max over the charts: the same for any thread count.
     const double tan_v = std::tan(cam.fov * 0.5 * std::numbers::pi / 180);
     const double tan_h = tan_v * double(width) / std::max(height, 1);
-    constexpr double kFill = 0.9;
+    constexpr double kFill = 0.85;
     auto need = [&](const Vec3d& p) {
         const Vec3d q = p - center;
         const double z = Dot(q, dir);
