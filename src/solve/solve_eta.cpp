@@ -6,9 +6,17 @@
 namespace mebake::solve {
 
 namespace {
-// Decay per batch assumed until two batches have been measured (about the albedo of a
-// scanned object with its first, all-chart batch).
-constexpr double kDefaultDecay = 0.35;
+// Priors until the batches have shown their own (measured on bunny, igea and nefertiti with
+// the default rig: after the first shot 0.6-5 % of its power is left unshot, and each later
+// batch leaves 5-20 % of what it found).
+constexpr double kFirstShotLeft = 0.03;
+constexpr double kDefaultDecay = 0.15;
+
+int BatchesToStop(double unshot, double decay, double stop) {
+    if (!(unshot > stop))
+        return 0;  // the solver stops at this batch's start
+    return std::max(1, int(std::ceil(std::log(stop / unshot) / std::log(decay))));
+}
 }  // namespace
 
 void SolveEta::BatchStart(int batch, double unshot, double seconds) {
@@ -21,23 +29,27 @@ void SolveEta::BatchStart(int batch, double unshot, double seconds) {
             ++later_count_;
         }
     }
-    if (first_batch_ < 0) {
+    if (first_batch_ < 0)
         first_batch_ = batch;
-        first_unshot_ = batch == 0 ? 1.0 : unshot;
+    // The decay is measured from the first batch start after the first shot: the first
+    // shot's own drop (the share of light the surfaces send back) is steeper than the rest.
+    if (ref_batch_ < 0 && batch >= 1) {
+        ref_batch_ = batch;
+        ref_unshot_ = unshot;
     }
     batch_ = batch;
     batch_started_ = seconds;
-    double decay = kDefaultDecay;
-    const int steps = batch - (first_batch_ == 0 ? 0 : first_batch_);
-    if (steps >= 1 && unshot > 0 && first_unshot_ > 0)
-        decay = std::clamp(std::pow(unshot / first_unshot_, 1.0 / steps), 0.01, 0.99);
-    int left = 1;
-    if (unshot > stop_ && unshot > 0)
-        left = std::max(1, int(std::ceil(std::log(stop_ / unshot) / std::log(decay))));
-    else
-        left = 0;  // this batch start is the last check: it stops here
-    estimated_batches_ = std::min(max_bounces_, batch + left);
-    estimated_batches_ = std::max(estimated_batches_, batch);
+    int left;
+    if (batch == 0) {
+        left = 1 + BatchesToStop(kFirstShotLeft, kDefaultDecay, stop_);
+    } else {
+        const int steps = batch - ref_batch_;
+        double decay = kDefaultDecay;
+        if (steps >= 1 && unshot > 0 && ref_unshot_ > 0)
+            decay = std::clamp(std::pow(unshot / ref_unshot_, 1.0 / steps), 0.01, 0.99);
+        left = BatchesToStop(unshot, decay, stop_);
+    }
+    estimated_batches_ = std::max(batch, std::min(max_bounces_, batch + left));
 }
 
 std::optional<double> SolveEta::Eta(double within, double seconds) const {

@@ -1,13 +1,13 @@
 // Time left in the Southwell batches of a solve (docs/method.md, "Progress and ETA").
 //
 // The work left is estimated from the unshot power, which the solver measures at the
-// start of every batch: it decays about geometrically (each batch shoots the charts
-// holding most of it, and surfaces reflect only a share), so the decay per batch so far,
-// r = (f_b / f_1)^(1 / (b - 1)), says how many batches it takes to fall below the stop
-// fraction (capped by the bounce limit). Batches after the first cost about the same
-// (the first shoots every chart); the time left is the batches left times the mean cost
-// of the later batches seen so far (the first one's until there is one), minus the share
-// of the current batch already gathered.
+// start of every batch: after the first shot it falls about geometrically (each batch
+// shoots the charts holding most of it, and surfaces send back only a share), so the decay
+// per batch seen so far, r = (f_b / f_1)^(1 / (b - 1)), says how many batches it takes to
+// fall below the stop fraction (capped by the bounce limit); priors stand in until it is
+// measured. Batches cost about the same; the time left is the batches left times the mean
+// cost of the batches after the first seen so far (the first one's until there is one),
+// less the share of the current batch's gathers already done.
 #pragma once
 
 #include <optional>
@@ -33,7 +33,8 @@ private:
     double stop_;
     int max_bounces_;
     int first_batch_ = -1, batch_ = -1;
-    double first_unshot_ = 1, batch_started_ = 0;
+    int ref_batch_ = -1;      // first batch start after the first shot, and its unshot
+    double ref_unshot_ = 1, batch_started_ = 0;
     double first_seconds_ = 0;  // cost of the first batch seen
     double later_seconds_ = 0;  // summed cost of the batches after it
     int later_count_ = 0;

@@ -4,8 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-
 using mebake::solve::SolveEta;
 
 // Unshot power that halves every batch, 10 s per batch after a first one of 30 s.
@@ -40,11 +38,11 @@ TEST(SolveEta, FirstBatchIsExtrapolatedFromItsGathers) {
     SolveEta eta(1e-3, 16);
     eta.BatchStart(0, 1.0, 0);
     EXPECT_FALSE(eta.Eta(0, 0).has_value());  // nothing to go by yet
-    // A quarter of the first batch in 5 s: 15 s more for it, then the rest at 20 s each.
-    const double decay = 0.35;  // assumed before a second batch is measured
-    const int batches = int(std::ceil(std::log(1e-3) / std::log(decay)));
-    ASSERT_EQ(eta.EstimatedBatches(), batches);
-    EXPECT_NEAR(*eta.Eta(0.25, 5), 15 + 20.0 * (batches - 1), 1e-9);
+    // Priors: 3 % left after the first shot, then 0.15 per batch: 0.03, 0.0045, 0.000675,
+    // so the solver stops at the start of batch 3.
+    ASSERT_EQ(eta.EstimatedBatches(), 3);
+    // A quarter of the first batch in 5 s: 15 s more for it, then two more at 20 s each.
+    EXPECT_NEAR(*eta.Eta(0.25, 5), 15 + 20.0 * 2, 1e-9);
 }
 
 TEST(SolveEta, AResumedSolveMeasuresItsDecayFromWhereItStarted) {
