@@ -12,6 +12,7 @@ import sys
 from array import array
 
 import bpy
+import mathutils
 
 addon_zip, mebake, sample, work = sys.argv[sys.argv.index("--") + 1:][:4]
 os.makedirs(work, exist_ok=True)
@@ -73,3 +74,38 @@ lit = sum(1 for v in hits if v > 0) / len(hits)
 assert lit > 0.9, f"only {lit:.2f} of the UVs land on lit texels"
 print(f"mebake add-on test: {len(mesh.polygons)} faces, light map {w}x{h}, "
       f"max {max(lum):.4g}, {lit:.3f} of the UVs on lit texels: OK")
+
+# What a user sees: a small Cycles render (black world, no lights) shows the object only
+# through the light map's emission.
+scene = bpy.context.scene
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
+scene.cycles.samples = 4
+scene.cycles.use_denoising = False  # Debian builds Cycles without OpenImageDenoise
+scene.render.resolution_x = scene.render.resolution_y = 64
+scene.render.resolution_percentage = 100
+scene.view_settings.view_transform = "Standard"
+world = bpy.data.worlds.new("black")
+world.use_nodes = False
+world.color = (0, 0, 0)
+scene.world = world
+cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+scene.collection.objects.link(cam)
+scene.camera = cam
+xs, ys, zs = [], [], []
+for corner in obj.bound_box:
+    p = obj.matrix_world @ mathutils.Vector(corner)
+    xs.append(p.x)
+    ys.append(p.y)
+    zs.append(p.z)
+size = max(max(xs) - min(xs), max(ys) - min(ys), max(zs) - min(zs))
+cam.location = ((min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2, max(zs) + 2 * size)  # looks down -Z
+scene.render.filepath = os.path.join(work, "cycles.png")
+bpy.ops.render.render(write_still=True)
+shot = bpy.data.images.load(scene.render.filepath)
+rw, rh = shot.size
+rp = array("f", bytes(4 * rw * rh * shot.channels))
+shot.pixels.foreach_get(rp)
+lit_px = sum(1 for i in range(0, len(rp), shot.channels) if max(rp[i:i + 3]) > 0.02)
+assert lit_px > 0.1 * rw * rh, f"the Cycles render shows the object in only {lit_px} pixels"
+print(f"mebake add-on test: Cycles render {rw}x{rh}, {lit_px} pixels lit by the light map: OK")
