@@ -88,16 +88,19 @@ Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
     const std::vector<uint32_t> charts = ObjectCharts(m);
     std::vector<double> dist(charts.size(), 0);
     ParallelFor(0, int64_t(charts.size()), [&](int64_t k) {
-        const auto tile = stream::ReadTile(view.TilePath(charts[size_t(k)]), stream::TileParts::Mesh);
+        const auto tile =
+            stream::ReadTile(view.TilePath(charts[size_t(k)]), stream::TileParts::Mesh);
         for (const Vec3f& p : tile.position)
             dist[size_t(k)] = std::max(dist[size_t(k)], need(Vec3d(p)));
     });
     double d = 1e-9 * std::max(Length(hi - lo), 1e-9);
     for (double v : dist)
         d = std::max(d, v);
-    if (charts.empty())  // nothing to frame: the box
+    if (charts.empty()) {  // nothing to frame: the box
         for (int k = 0; k < 8; ++k)
-            d = std::max(d, need(Vec3d(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z)));
+            d = std::max(d, need(Vec3d(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y,
+                                       k & 4 ? hi.z : lo.z)));
+    }
     cam.eye = center + dir * d;
     cam.target = center;
     cam.up = up;

@@ -462,6 +462,8 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
     const size_t group = std::max<size_t>(1, opt_.emitter_group);
     const uint64_t gathers = nc * ((shooters.size() + group - 1) / group);
     std::atomic<uint64_t> gathered{0};
+    const double unshot =
+        stats_.emitted_power > 0 ? stats_.unshot_power / stats_.emitted_power : 0;
     for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
         const size_t g1 = std::min(shooters.size(), g0 + group);
         std::vector<Emitter> emitters(g1 - g0);
@@ -473,9 +475,7 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
         ParallelFor(0, nc, [&](int64_t r) {
             Gather(uint32_t(r), emitters);
             if (progress_ && *progress_)
-                (*progress_)({next_batch_, ++gathered, gathers,
-                              stats_.emitted_power > 0 ? stats_.unshot_power / stats_.emitted_power : 0,
-                              0});
+                (*progress_)({next_batch_, ++gathered, gathers, unshot, 0});
         });
     }
     return shooters.size();

@@ -260,10 +260,10 @@ Manifest Ingest(const IngestOptions& opt) {
     m.surface_area = plan.surface_area;
     // The ground takes no light-map resolution from the scans: the texel size follows from
     // their area alone (the atlas grows by the ground's share).
+    const double ground_area =
+        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max) : 0.0;
     const double texel_area =
-        m.ground ? std::max(plan.surface_area - GroundPlaneArea(m.object_bbox_min, m.object_bbox_max),
-                            1e-3 * plan.surface_area)
-                 : plan.surface_area;
+        std::max(plan.surface_area - ground_area, 1e-3 * plan.surface_area);
     m.texel_size = opt.texel_size > 0
                        ? opt.texel_size
                        : std::sqrt(texel_area / (0.5 * double(opt.lightmap_resolution) *
