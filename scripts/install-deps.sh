@@ -11,6 +11,7 @@ PKGS=(
   clang-14 libclang-rt-14-dev
   time openexr
   libcpp-httplib-dev libmeshoptimizer-dev chromium
+  tmux  # tests/e2e/progress_tmux_test.cpp: progress lines as a terminal shows them
 )
 
 missing=()

@@ -41,6 +41,7 @@ stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     opt.lightmap_resolution = c.lightmap_resolution;
     opt.max_distortion = c.max_distortion;
     opt.force = c.force;
+    opt.ground = c.ground;
     return opt;
 }
 
@@ -89,6 +90,7 @@ int RunBake(const BakeCommand& c) {
     o.tolerance = c.tolerance;
     o.max_bounces = c.max_bounces;
     o.lightmap_resolution = c.lightmap_resolution;
+    o.ground = c.ground;
     o.checkpoint_interval = c.checkpoint_interval;
     o.force = c.force;
     output::RunBakeJob(o);

@@ -38,6 +38,7 @@ struct IngestCommand {
     uint32_t lightmap_resolution = 2048;
     double max_distortion = 0.05;
     bool force = false;
+    bool ground = false;
 };
 int RunIngest(const IngestCommand& opt);
 
@@ -69,6 +70,7 @@ struct BakeCommand {
     int order = -1;
     double tolerance = -1;
     int max_bounces = -1;
+    bool ground = false;
     uint32_t lightmap_resolution = 2048;
     double checkpoint_interval = 30;
     bool force = false;

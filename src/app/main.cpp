@@ -13,6 +13,7 @@
 #include "app/view_commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "io/mesh_format.h"
 
 namespace {
@@ -46,10 +47,17 @@ int main(int argc, char** argv) {
         "mebake"};
     app.set_version_flag("--version", std::string("mebake ") + MEBAKE_VERSION);
     app.require_subcommand(1);
+    app.fallthrough();  // global options (-q, --progress) may also follow the command
     int verbosity = 0;
     app.add_flag("-v,--verbose", verbosity, "More detail on stderr (repeat for trace)");
     bool quiet = false;
     app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+    std::string progress = "auto";
+    app.add_option("--progress", progress,
+                   "Progress of long stages on stderr: auto (a line redrawn on a terminal, a "
+                   "log line every 5 s otherwise), plain, json (one object per line), off")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "plain", "json", "off"}));
 
     // info
     mebake::app::InfoOptions info;
@@ -102,6 +110,9 @@ int main(int argc, char** argv) {
                         "Jacobian (area) deviation above which a chart is split")->capture_default_str()
         ->check(CLI::Range(0.001, 1.0));
     ing_cmd->add_flag("-f,--force", ing.force, "Replace an existing bake directory");
+    ing_cmd->add_flag("--ground", ing.ground,
+                      "Add a ground plane under the scans (at the bounding box's floor, +Y up, "
+                      "3x the object's width, albedo 0.4)");
 
     // solve
     mebake::app::SolveCommand sol;
@@ -239,7 +250,7 @@ int main(int argc, char** argv) {
         "render", "Render a view of the baked lighting (pinhole camera, full-resolution mesh).");
     ren_cmd->add_option("dir", ren.dir, "Solved bake directory")->required();
     ren_cmd->add_option("-o,--output", ren.output, "Image: .exr (linear radiance) or .png (tone-mapped); '-' = EXR on stdout")->required();
-    ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a view of the whole scene)")->expected(3)->delimiter(',');
+    ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a three-quarter view from the key light's side, the object filling 85 % of the frame)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--up", ren.up, "Up direction x y z (default: the scene's up)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--fov", ren.fov, "Vertical field of view, degrees")->capture_default_str()
@@ -263,7 +274,10 @@ int main(int argc, char** argv) {
     auto* bk_cmd = app.add_subcommand(
         "bake", "Ingest, solve and export in one go: writes OUT/lightmap.exr and .png, "
                 "OUT/baked.glb,\nOUT/vertex_colors.ply, OUT/render.png and OUT/scene.mebake; "
-                "'-o -' streams the\nvertex-coloured PLY to stdout.");
+                "'-o -' streams the\nvertex-coloured PLY to stdout.\n"
+                "Defaults without --scene: a uniform sky and a key area light from the right, 40 "
+                "degrees up\n(key : sky about 3 : 1); OUT/render.png looks from a three-quarter "
+                "view on the key's\nside with the object filling about 85 % of the frame.");
     bk_cmd->add_option("inputs", bk.inputs, "Mesh files, or '-' for stdin")->required();
     bk_cmd->add_option("-o,--output", bk.output, "Output directory, or '-' for stdout")->required();
     bk_cmd->add_option("--format", bk_format, "Format of stdin")->check(kFormatName);
@@ -277,6 +291,9 @@ int main(int argc, char** argv) {
                        "Seconds between solver checkpoints (0: every batch)")->capture_default_str();
     bk_cmd->add_option("--lightmap-resolution", bk.lightmap_resolution,
                        "Atlas side the texel size aims at")->capture_default_str();
+    bk_cmd->add_flag("--ground", bk.ground,
+                     "Add a ground plane under the scan that receives its shadow and bounces "
+                     "light (at the bounding box's floor, +Y up, 3x the object's width, albedo 0.4)");
     bk_cmd->add_flag("-f,--force", bk.force,
                      "Start over in an existing directory (without it, a bake resumes there)");
 
@@ -314,6 +331,7 @@ int main(int argc, char** argv) {
 
     mebake::InitLogging(quiet ? -1 : verbosity);
     try {
+        mebake::SetProgressMode(mebake::ParseProgressMode(progress, quiet));
         if (*info_cmd) {
             info.format = ToFormat(info_format);
             return mebake::app::RunInfo(info);

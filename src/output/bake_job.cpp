@@ -119,6 +119,7 @@ void RunBakeJob(const BakeJobOptions& c) {
     ing.memory = c.memory;
     ing.threads = c.threads;
     ing.lightmap_resolution = c.lightmap_resolution;
+    ing.ground = c.ground;
     ing.force = true;
     IngestOrReuse(ing, resuming, out_dir, to_stdout);
     Solve(c, ing.out_dir);

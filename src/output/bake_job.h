@@ -24,6 +24,7 @@ struct BakeJobOptions {
     double tolerance = -1;
     int max_bounces = -1;
     uint32_t lightmap_resolution = 2048;
+    bool ground = false;  // a ground plane under the inputs (stream/ground.h)
     double checkpoint_interval = 30;
     bool force = false;
 };

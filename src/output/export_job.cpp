@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "output/bake_view.h"
@@ -128,6 +129,12 @@ void RunExportJob(const ExportJobOptions& c) {
     j["atlas"] = AtlasJson(atlas);
     j["tone_map"] = {{"exposure", c.maps.tone.exposure}, {"curve", c.tone_curve}};
     nlohmann::json seconds = nlohmann::json::object();
+    // Counted per output written (each goes through every chart): the light-map and mesh
+    // writers report nothing finer yet.
+    uint64_t outputs = 0;
+    for (const auto* o : {&c.lightmap, &c.irradiance, &c.mesh, &c.vertex_colors, &c.stats})
+        outputs += o->empty() ? 0 : 1;
+    ProgressStage progress("export", outputs * view.chart_count(), "charts");
 
     struct Map {
         const std::string& path;
@@ -143,6 +150,7 @@ void RunExportJob(const ExportJobOptions& c) {
         const auto files = WriteMapPages(view, atlas, m.path, m.content, c.maps);
         seconds[m.key] = Since(t);
         j[m.key] = files;
+        progress.Add(view.chart_count());
         spdlog::info("{}: {} ({})", m.what, fmt::join(files, ", "), FormatSeconds(Since(t)));
     }
     if (!c.mesh.empty()) {
@@ -152,6 +160,7 @@ void RunExportJob(const ExportJobOptions& c) {
         me.tone = c.maps.tone;
         const auto st = WriteBakedMesh(view, atlas, c.mesh, me);
         seconds["mesh"] = Since(t);
+        progress.Add(view.chart_count());
         j["mesh"] = {{"path", c.mesh}, {"vertices", st.vertices}, {"triangles", st.triangles}};
         spdlog::info("mesh: {} ({} vertices, {} triangles, {})", c.mesh,
                      FormatCount(double(st.vertices)), FormatCount(double(st.triangles)),
@@ -164,6 +173,7 @@ void RunExportJob(const ExportJobOptions& c) {
         vo.float_colors = c.float_colors;
         const auto st = WriteVertexColors(view, c.vertex_colors, vo);
         seconds["vertex_colors"] = Since(t);
+        progress.Add(view.chart_count());
         j["vertex_colors"] = {
             {"path", c.vertex_colors},     {"vertices", st.vertices},
             {"referenced", st.referenced}, {"shared", st.shared},
@@ -176,7 +186,9 @@ void RunExportJob(const ExportJobOptions& c) {
         const auto t = Clock::now();
         MeasureAllSeams(view, &j);
         seconds["seams"] = Since(t);
+        progress.Add(view.chart_count());
     }
+    progress.Finish();
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;
     j["peak_rss_bytes"] = PeakRssBytes();

@@ -3,6 +3,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "io/png_writer.h"
 #include "solve/visibility.h"
 
@@ -37,21 +38,70 @@ Vec3f SkyRadiance(const solve::Sky& sky, const Vec3f& dir) {
 
 }  // namespace
 
+// Charts of the object: all, or with --ground those inside the object's box (the ground's
+// charts reach outside it).
+static std::vector<uint32_t> ObjectCharts(const stream::Manifest& m) {
+    std::vector<uint32_t> charts;
+    const Vec3d lo = m.object_bbox_min, hi = m.object_bbox_max;
+    const Vec3d eps = (hi - lo) * 1e-3;
+    auto inside = [&](const Vec3f& q) {
+        const Vec3d p(q);
+        return p.x >= lo.x - eps.x && p.y >= lo.y - eps.y && p.z >= lo.z - eps.z &&
+               p.x <= hi.x + eps.x && p.y <= hi.y + eps.y && p.z <= hi.z + eps.z;
+    };
+    for (uint32_t c = 0; c < m.charts.size(); ++c)
+        if (!m.ground || (inside(m.charts[c].bbox_min) && inside(m.charts[c].bbox_max)))
+            charts.push_back(c);
+    return charts;
+}
+
 Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
     Camera cam;
     cam.width = width;
     cam.height = height;
     cam.fov = fov > 0 && fov < 180 ? fov : 50;
-    const Vec3d lo = view.manifest.bbox_min, hi = view.manifest.bbox_max;
+    const stream::Manifest& m = view.manifest;
+    const Vec3d lo = m.ground ? m.object_bbox_min : m.bbox_min;
+    const Vec3d hi = m.ground ? m.object_bbox_max : m.bbox_max;
     const Vec3d center = (lo + hi) * 0.5;
-    const double radius = std::max(0.5 * Length(hi - lo), 1e-9);
     const Vec3d up = Normalize(view.scene.sky.up);
+    // The frame of the default rig (solve/scene.cpp): the key light stands at the side
+    // (+side), 40 degrees up; the camera looks from a three-quarter view on the same side,
+    // lower, so that the shadows the key casts fall across the faces it sees.
     Vec3d side = std::abs(up.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 0, 1);
     const Vec3d front = Normalize(Cross(side, up));
     side = Normalize(Cross(up, front));
-    const Vec3d dir = Normalize(front * 1.0 + side * 0.6 + up * 0.5);
-    const double half = cam.fov * 0.5 * std::numbers::pi / 180;
-    cam.eye = center + dir * (1.1 * radius / std::sin(half));
+    const Vec3d dir = Normalize(front * 1.0 + side * 0.75 + up * 0.4);  // towards the eye
+    const Vec3d right = Normalize(Cross(-dir, up)), cam_up = Cross(right, -dir);
+    // The distance at which every vertex of the object projects inside 85 % of the frame
+    // (tighter than its bounding sphere, which leaves a round object at half the frame).
+    // A max over the charts: the same for any thread count.
+    const double tan_v = std::tan(cam.fov * 0.5 * std::numbers::pi / 180);
+    const double tan_h = tan_v * double(width) / std::max(height, 1);
+    constexpr double kFill = 0.85;
+    auto need = [&](const Vec3d& p) {
+        const Vec3d q = p - center;
+        const double z = Dot(q, dir);
+        return std::max({z + std::abs(Dot(q, right)) / (kFill * tan_h),
+                         z + std::abs(Dot(q, cam_up)) / (kFill * tan_v), 2 * z});
+    };
+    const std::vector<uint32_t> charts = ObjectCharts(m);
+    std::vector<double> dist(charts.size(), 0);
+    ParallelFor(0, int64_t(charts.size()), [&](int64_t k) {
+        const auto tile =
+            stream::ReadTile(view.TilePath(charts[size_t(k)]), stream::TileParts::Mesh);
+        for (const Vec3f& p : tile.position)
+            dist[size_t(k)] = std::max(dist[size_t(k)], need(Vec3d(p)));
+    });
+    double d = 1e-9 * std::max(Length(hi - lo), 1e-9);
+    for (double v : dist)
+        d = std::max(d, v);
+    if (charts.empty()) {  // nothing to frame: the box
+        for (int k = 0; k < 8; ++k)
+            d = std::max(d, need(Vec3d(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y,
+                                       k & 4 ? hi.z : lo.z)));
+    }
+    cam.eye = center + dir * d;
     cam.target = center;
     cam.up = up;
     return cam;
@@ -103,6 +153,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const int k = opt.samples;
     const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
     std::vector<uint64_t> row_hits(size_t(cam.height), 0);
+    ProgressStage progress("render", uint64_t(cam.height), "rows");
     ParallelFor(0, cam.height, [&](int64_t py) {
         std::vector<solve::Segment> segs(per_row);
         std::vector<solve::Hit> hits(per_row);
@@ -142,7 +193,9 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 out[c] = sum[c] * weight;
         }
         row_hits[size_t(py)] = count;
+        progress.Add();
     });
+    progress.Finish();
     img.rays = uint64_t(per_row) * uint64_t(cam.height);
     for (uint64_t h : row_hits)
         img.hits += h;

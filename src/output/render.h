@@ -45,7 +45,9 @@ struct RenderedImage {
     }
 };
 
-// A camera that sees the whole bounding box from the front-right-above (quick looks).
+// The default view: a three-quarter view from the key light's side of the default rig
+// (solve/scene.cpp), slightly above, at the distance where the object (its tiles' vertices)
+// fills 85 % of the frame's height or width (the ground of --ground is left out of the framing).
 Camera DefaultCamera(const BakeView& view, int width, int height, double fov = 50);
 
 // Throws Error(Usage) for a degenerate camera (eye = target, up parallel to the view,

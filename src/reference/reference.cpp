@@ -3,9 +3,12 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "solve/visibility.h"
 #include "stream/tile.h"
 #include "stream/trimesh.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <atomic>
@@ -518,9 +521,15 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
     double last_round = 0;
     for (int round = 0;; ++round) {
         const auto tr = Clock::now();
+        uint64_t paths = 0;
+        for (size_t i = 0; i < points.size(); ++i)
+            paths += want[i] - acc[i].n;
+        ProgressStage stage("reference", paths, "paths");
+        stage.SetDetail(fmt::format("round {}", round));
         ParallelFor(0, int64_t(points.size()), [&](int64_t i) {
             ReferencePoint& p = points[size_t(i)];
             Accum& a = acc[size_t(i)];
+            const uint64_t todo = want[size_t(i)] - a.n;
             for (uint64_t s = a.n; s < want[size_t(i)]; ++s) {
                 Rng rng(opt.seed, p.stream == ReferencePoint::kIndexStream ? uint64_t(i) : p.stream,
                         s);
@@ -554,7 +563,9 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
                 }
             }
             p.samples = a.n;
+            stage.Add(todo);
         });
+        stage.Finish();
         ++st.rounds;
         last_round = std::chrono::duration<double>(Clock::now() - tr).count();
         if (round == 0) {

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "io/mtl_reader.h"
+#include "stream/ground.h"
 
 namespace mebake::solve {
 
@@ -86,6 +87,14 @@ void ApplyMaterialJson(Material& m, const json& j, const std::string& file, cons
 
 }  // namespace
 
+// The rig lights the object, not the ground plane --ground added around it.
+static void AddObjectRig(Scene& scene, const stream::Manifest& m) {
+    if (m.ground)
+        AddDefaultRig(scene, m.object_bbox_min, m.object_bbox_max);
+    else
+        AddDefaultRig(scene, m.bbox_min, m.bbox_max);
+}
+
 void AddDefaultRig(Scene& scene, const Vec3d& bmin, const Vec3d& bmax) {
     Vec3d center = (bmin + bmax) * 0.5;
     double diag = std::max(Length(bmax - bmin), 1e-9);
@@ -93,16 +102,18 @@ void AddDefaultRig(Scene& scene, const Vec3d& bmin, const Vec3d& bmax) {
     // A uniform sky of radiance 1/pi... gives irradiance 1 on an open upward face.
     scene.sky.type = Sky::Type::Uniform;
     scene.sky.radiance = Vec3d(0.25, 0.27, 0.30);
-    // Key light: a square of side diag/2, 1.5 diagonals away, from up-front-right.
+    // Key light: a square of side diag/5, 1.5 diagonals away, from the side (the default
+    // camera's right, output/render.cpp) and 40 degrees above the horizon: small and low
+    // enough to cast shadows the camera sees, where one from near the camera would hide them.
     Vec3d side = std::abs(up.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 0, 1);
     Vec3d front = Normalize(Cross(side, up));
     side = Normalize(Cross(up, front));
-    Vec3d dir = Normalize(up * 1.0 + front * 0.6 + side * 0.5);
+    Vec3d dir = Normalize(up * 0.84 + side * 0.94 - front * 0.2);
     Vec3d c = center + dir * (1.5 * diag);
     // Axes of the square, perpendicular to dir; the light faces the centre.
     Vec3d a = Normalize(Cross(dir, up));
     Vec3d b = Cross(a, dir);
-    double h = diag * 0.25;
+    double h = diag * 0.1;
     PolygonLight key;
     // Wound so its front normal a x b = -dir faces the centre.
     key.vertices = {c - a * h - b * h, c + a * h - b * h, c + a * h + b * h, c - a * h + b * h};
@@ -120,6 +131,9 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
         std::vector<Material> mats;
         if (in.materials.empty()) mats.push_back(FromMtl("", lib));
         for (const auto& name : in.materials) mats.push_back(FromMtl(name, lib));
+        if (in.path == stream::kGroundSource)  // --ground: a neutral floor
+            mats.front().albedo = Vec3f(stream::kGroundAlbedo, stream::kGroundAlbedo,
+                                        stream::kGroundAlbedo);
         scene.per_input.push_back(std::move(mats));
     }
     bool any_emitter = false;
@@ -129,7 +143,7 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
     if (scene_file.empty()) {
         scene.description = any_emitter ? "materials from the inputs (emissive materials light it)"
                                         : "default rig: uniform sky and a key area light";
-        if (!any_emitter) AddDefaultRig(scene, manifest.bbox_min, manifest.bbox_max);
+        if (!any_emitter) AddObjectRig(scene, manifest);
         return scene;
     }
 
@@ -189,7 +203,8 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
             else InputError({scene_file}, "sky.type '{}': expected uniform, overcast or none", type);
             if (s.contains("radiance")) scene.sky.radiance = ReadVec3(s["radiance"], scene_file, "sky.radiance");
         }
-        if (j.value("default_rig", false)) AddDefaultRig(scene, manifest.bbox_min, manifest.bbox_max);
+        if (j.value("default_rig", false))
+            AddObjectRig(scene, manifest);
         if (j.contains("solver")) {
             const auto& s = j["solver"];
             auto& o = scene.solver;

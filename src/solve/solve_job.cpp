@@ -6,6 +6,7 @@
 #include "core/log.h"
 #include "core/memory_budget.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
@@ -13,6 +14,7 @@
 #include "solve/geometry_cache.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
+#include "solve/solve_eta.h"
 #include "solve/solution.h"
 #include "solve/visibility.h"
 #include "stream/bake_dir.h"
@@ -24,6 +26,8 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sstream>
@@ -284,20 +288,43 @@ private:
     double last_duration_ = 0;
 };
 
-// Runs the solver with a progress line on a terminal; throws Error(Cancelled) with what to
-// do next when a signal stopped it.
-void RunSolver(Solver& solver, const std::string& dir) {
-    const bool tty = StderrIsTerminal();
-    const auto t_run = Clock::now();
-    solver.Run([&](int batch, double unshot, uint64_t rays) {
-        const double secs = Since(t_run);
-        if (tty)
-            std::fprintf(stderr, "\r  batch %d: unshot %.3g%%, %s rays, %s rays/s   ", batch,
-                         unshot * 100, FormatCount(double(rays)).c_str(),
-                         FormatCount(secs > 0 ? double(rays) / secs : 0).c_str());
+// Runs the solver with progress lines (the direct pass, then the batches with the time
+// left from SolveEta); throws Error(Cancelled) with what to do next when a signal stopped it.
+void RunSolver(Solver& solver, const SolverSettings& set, size_t charts, const std::string& dir) {
+    std::optional<ProgressStage> direct, bounces;
+    if (solver.next_batch() < 0)
+        direct.emplace("direct", charts, "charts");
+    SolveEta eta(set.stop_fraction, set.max_bounces);
+    std::mutex mutex;  // the callback runs on worker threads
+    Clock::time_point t_batches{};
+    solver.Run([&](const Solver::ProgressInfo& p) {
+        if (p.batch < 0) {
+            direct->Set(p.done);  // from several threads: the stage's counter is atomic
+            return;
+        }
+        std::lock_guard lock(mutex);
+        if (direct)
+            direct->Finish();
+        if (!bounces) {
+            bounces.emplace("solve", 0, "gathers");
+            t_batches = Clock::now();
+        }
+        const double secs = Since(t_batches);
+        if (p.done == 0) {
+            eta.BatchStart(p.batch, p.unshot, secs);
+            bounces->SetDetail(fmt::format("batch {} of ~{}, unshot {:.3g}%", p.batch,
+                                           std::max(eta.EstimatedBatches(), p.batch + 1),
+                                           100 * p.unshot));
+            return;
+        }
+        const double within = p.total ? double(p.done) / double(p.total) : 0;
+        bounces->SetEstimate(eta.Fraction(within, secs), eta.Eta(within, secs));
+        bounces->Add();
     });
-    if (tty)
-        std::fprintf(stderr, "\n");
+    if (direct)
+        direct->Finish();
+    if (bounces)
+        bounces->Finish();
     LogMemory("solver finished");
     if (solver.stats().stop_reason != "interrupted")
         return;
@@ -423,7 +450,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     solver.SetStopFlag(&g_stop);
     CheckpointSchedule checkpoints(opt.dir, opt.checkpoint_interval, key);
     solver.SetBatchHook([&](int next_batch) { return checkpoints.AtBoundary(solver, next_batch); });
-    RunSolver(solver, opt.dir);
+    RunSolver(solver, so.settings, charts.size(), opt.dir);
     const SolveStats& st = solver.stats();
     const double total = Since(t0);
     spdlog::info("solved in {} ({} batches, {} rays, {} leaves, stop: {}, unshot {:.3g}%)",

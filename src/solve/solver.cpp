@@ -494,6 +494,10 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
     // same batch (Southwell shooting allows any order); the groups depend on the chart
     // order only, not on the thread count.
     const size_t group = std::max<size_t>(1, opt_.emitter_group);
+    const uint64_t gathers = nc * ((shooters.size() + group - 1) / group);
+    std::atomic<uint64_t> gathered{0};
+    const double unshot =
+        stats_.emitted_power > 0 ? stats_.unshot_power / stats_.emitted_power : 0;
     for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
         const size_t g1 = std::min(shooters.size(), g0 + group);
         std::vector<Emitter> emitters(g1 - g0);
@@ -516,7 +520,11 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
         }
         for (size_t k = g0; k < g1; ++k)
             fields_[shooters[k]].ClearUnshot();
-        ParallelFor(0, nc, [&](int64_t r) { Gather(uint32_t(r), emitters, links); });
+        ParallelFor(0, nc, [&](int64_t r) {
+            Gather(uint32_t(r), emitters, links);
+            if (progress_ && *progress_)
+                (*progress_)({next_batch_, ++gathered, gathers, unshot, 0});
+        });
     }
     return shooters.size();
 }
@@ -545,11 +553,15 @@ void Solver::Run(const Progress& progress) {
     for (size_t k = 0; k < kinds0.size() && k < stats_.rays_by_kind.size(); ++k)
         kinds0[k] -= stats_.rays_by_kind[k];
 
+    progress_ = &progress;
     if (next_batch_ < 0) {
         reference_ = ReferenceIrradiance();
+        std::atomic<uint64_t> refined{0};
         ParallelFor(0, nc, [&](int64_t c) {
             if (!stop_ || !stop_->load())
                 RefineDirect(uint32_t(c));
+            if (progress)
+                progress({-1, ++refined, nc, 1, 0});
         });
         stats_.seconds_direct = Since(t0);
         if (stop_ && stop_->load()) {
@@ -582,7 +594,7 @@ void Solver::Run(const Progress& progress) {
         stats_.unshot_power = total;
         const double fraction = stats_.emitted_power > 0 ? total / stats_.emitted_power : 0;
         if (progress)
-            progress(batch, fraction, TotalRays() - rays0);
+            progress({batch, 0, 0, fraction, TotalRays() - rays0});
         if (total <= 0 || fraction < opt_.settings.stop_fraction) {
             stats_.stop_reason = "converged";
             break;

@@ -87,8 +87,16 @@ public:
     Solver(const Scene& scene, const std::vector<SolveChart>& charts, const VisibilityScene& vis,
            SolveOptions opt);
 
-    // Progress callback: (batch, unshot fraction, rays so far).
-    using Progress = std::function<void(int, double, uint64_t)>;
+    // Progress, called from worker threads: during the direct pass (batch -1) `done` counts
+    // the charts refined; at the start of a batch (done 0) and after each receiver's gather
+    // it counts the receiver gathers of that batch (total: charts x emitter groups).
+    struct ProgressInfo {
+        int batch = -1;
+        uint64_t done = 0, total = 0;
+        double unshot = 1;  // unshot power / first-shot power at the batch's start
+        uint64_t rays = 0;  // so far in this run (0 from worker threads)
+    };
+    using Progress = std::function<void(const ProgressInfo&)>;
     void Run(const Progress& progress = {});
 
     // Checkpoints (checkpoint.h). At every batch boundary (after the direct pass and after
@@ -185,6 +193,7 @@ private:
     int next_batch_ = -1;
     BatchHook batch_hook_;
     const std::atomic<bool>* stop_ = nullptr;
+    const Progress* progress_ = nullptr;  // during Run()
 };
 
 }  // namespace mebake::solve

@@ -77,6 +77,10 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
     j["vertex_count"] = m.vertex_count;
     j["face_count"] = m.face_count;
     j["bbox"] = {Vec(m.bbox_min), Vec(m.bbox_max)};
+    if (m.ground) {
+        j["ground"] = true;
+        j["object_bbox"] = {Vec(m.object_bbox_min), Vec(m.object_bbox_max)};
+    }
     j["surface_area"] = m.surface_area;
     j["brick_count"] = m.brick_count;
     j["charts"] = json::array();
@@ -148,6 +152,9 @@ Manifest ReadManifest(const std::string& dir) {
         m.face_count = j.at("face_count");
         m.bbox_min = ToVec3d(j.at("bbox").at(0));
         m.bbox_max = ToVec3d(j.at("bbox").at(1));
+        m.ground = j.value("ground", false);
+        m.object_bbox_min = m.ground ? ToVec3d(j.at("object_bbox").at(0)) : m.bbox_min;
+        m.object_bbox_max = m.ground ? ToVec3d(j.at("object_bbox").at(1)) : m.bbox_max;
         m.surface_area = j.at("surface_area");
         m.brick_count = j.at("brick_count");
         for (const auto& c : j.at("charts")) {

@@ -68,6 +68,10 @@ struct Manifest {
     // Counts.
     uint64_t vertex_count = 0, face_count = 0;
     Vec3d bbox_min{}, bbox_max{};
+    // --ground: a ground plane was added as the last input (ground.h); the object's box is
+    // the inputs' without it (the default camera and light frame the object).
+    bool ground = false;
+    Vec3d object_bbox_min{}, object_bbox_max{};
     double surface_area = 0;
     uint32_t brick_count = 0;
     std::vector<ChartRecord> charts;

@@ -144,6 +144,8 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
         cells.Push(cell);
         ++count[cell];
         plan.surface_area += 0.5 * Length(Cross(p[1] - p[0], p[2] - p[0]));
+        if (opt.progress && (f & 4095) == 4095)
+            opt.progress->Add(4096);
     }
     cells.Flush();
 
@@ -198,6 +200,8 @@ BrickPlan BinFaces(const std::string& dir, const SpillResult& spill, const BinOp
             uint32_t brick = brick_of_cell[cells.Get(f)];
             files[brick].Add(BrickFace{{sf.v[0], sf.v[1], sf.v[2]}, f, sf.material, 0});
             ++plan.bricks[brick].face_count;
+            if (opt.progress && (f & 4095) == 4095)
+                opt.progress->Add(4096);
             for (int c = 0; c < 3; ++c) {
                 uint32_t o = owners.Get(sf.v[c]);
                 if (o == kOwnerNone)

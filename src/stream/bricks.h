@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.h"
 #include "core/vec.h"
 #include "stream/spill.h"
 
@@ -43,6 +44,7 @@ struct BrickPlan {
 struct BinOptions {
     uint64_t max_faces = 200000;
     size_t cache_bytes = size_t(64) << 20;  // vertex look-up and owner caches
+    ProgressStage* progress = nullptr;      // counts each face twice (cells, distribution)
 };
 
 // Reads the spill in `dir`, writes <dir>/bricks/bNNNNN.faces and <dir>/owners.bin

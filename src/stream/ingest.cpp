@@ -4,12 +4,14 @@
 #include "core/log.h"
 #include "core/memory_budget.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
 #include "io/mesh_format.h"
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
+#include "stream/ground.h"
 #include "stream/proxy_cluster.h"
 #include "stream/spill.h"
 
@@ -75,8 +77,16 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
     const uint64_t full_budget = FullMeshTriangleBudget(visibility);
     const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(visibility), 1);
     const double diag = Length(m->bbox_max - m->bbox_min);
+    // Brick parts read: once each for the full mesh, twice per clustering round (ETA for
+    // one round; the total grows if another round is needed).
+    ProgressStage progress("proxy", total <= full_budget ? bricks : 2 * uint64_t(bricks),
+                           "parts");
+    std::atomic<uint64_t> reads{0};  // parts may be read ahead on another thread
     // One brick's part of the full repaired mesh, as pass 3 spilled it (empty if none).
     auto source = [&](uint32_t b) {
+        if (const uint64_t n = ++reads; n > 2 * uint64_t(bricks))
+            progress.SetTotal(n + 2 * uint64_t(bricks) - 1);
+        progress.Add();
         ProxyMesh part;
         if (!fs::exists(BrickProxyPath(dir, b)))
             return part;
@@ -127,6 +137,43 @@ void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_trian
             : std::string());
 }
 
+// Passes the reader's batches on to the spill and reports the bytes read so far.
+class ProgressSink : public io::MeshSink {
+public:
+    ProgressSink(io::MeshSink& inner, const io::InputStream& in, ProgressStage& stage,
+                 uint64_t before)
+        : inner_(inner), in_(in), stage_(stage), before_(before) {}
+    void Begin(const io::MeshHeader& header) override { inner_.Begin(header); }
+    void Vertices(const io::VertexBatch& b) override {
+        inner_.Vertices(b);
+        stage_.Set(before_ + in_.offset());
+    }
+    void Faces(const io::FaceBatch& b) override {
+        inner_.Faces(b);
+        stage_.Set(before_ + in_.offset());
+    }
+    void End(const io::MeshSummary& summary) override { inner_.End(summary); }
+
+private:
+    io::MeshSink& inner_;
+    const io::InputStream& in_;
+    ProgressStage& stage_;
+    const uint64_t before_;
+};
+
+// Bytes of all inputs, or 0 when one of them (stdin) has no known size.
+uint64_t InputBytes(const std::vector<std::string>& inputs) {
+    uint64_t total = 0;
+    for (const auto& path : inputs) {
+        std::error_code ec;
+        const uint64_t size = path == "-" ? 0 : uint64_t(fs::file_size(path, ec));
+        if (path == "-" || ec || size == 0)
+            return 0;
+        total += size;
+    }
+    return total;
+}
+
 }  // namespace
 
 Manifest Ingest(const IngestOptions& opt) {
@@ -149,11 +196,22 @@ Manifest Ingest(const IngestOptions& opt) {
         // Scoped: the spill's page caches are freed before the passes that follow.
         // Appends only: a few pages per file are enough to write in large blocks.
         Spill spill(dir, budget.SpillCache());
+        ProgressStage progress("spill", InputBytes(opt.inputs), "B");
+        uint64_t before = 0;
         for (const auto& path : opt.inputs) {
             auto in = io::InputStream::Open(path);
             io::MeshFormat format = io::DetectFormat(*in, path, opt.format);
             spdlog::info("reading {} ({})", in->name(), io::FormatName(format));
-            io::ReadMesh(*in, format, spill.BeginInput(path));
+            ProgressSink sink(spill.BeginInput(path), *in, progress, before);
+            io::ReadMesh(*in, format, sink);
+            before += in->offset();
+        }
+        progress.Finish();
+        m.object_bbox_min = spill.result().bbox_min;
+        m.object_bbox_max = spill.result().bbox_max;
+        if (opt.ground && spill.result().face_count > 0) {
+            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, spill.BeginInput(kGroundSource));
+            m.ground = true;
         }
         sr = spill.Finish();
     }
@@ -191,14 +249,25 @@ Manifest Ingest(const IngestOptions& opt) {
     const uint64_t spilled_bytes = sr.vertex_count * 16 + sr.face_count * 16;
     bopt.cache_bytes = std::min<uint64_t>(
         budget.BinningCache(), 4 * spilled_bytes + (uint64_t(4) << 20));
-    BrickPlan plan = BinFaces(dir, sr, bopt);
+    BrickPlan plan;
+    {
+        ProgressStage progress("bricks", 2 * sr.face_count, "faces");
+        bopt.progress = &progress;
+        plan = BinFaces(dir, sr, bopt);
+    }
     m.brick_faces = bopt.max_faces;
     m.brick_count = uint32_t(plan.bricks.size());
     m.surface_area = plan.surface_area;
+    // The ground takes no light-map resolution from the scans: the texel size follows from
+    // their area alone (the atlas grows by the ground's share).
+    const double ground_area =
+        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max) : 0.0;
+    const double texel_area =
+        std::max(plan.surface_area - ground_area, 1e-3 * plan.surface_area);
     m.texel_size = opt.texel_size > 0
                        ? opt.texel_size
-                       : std::sqrt(plan.surface_area / (0.5 * double(opt.lightmap_resolution) *
-                                                        opt.lightmap_resolution));
+                       : std::sqrt(texel_area / (0.5 * double(opt.lightmap_resolution) *
+                                                 opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
     spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
                  plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
@@ -214,8 +283,7 @@ Manifest Ingest(const IngestOptions& opt) {
     copt.cache_bytes = uint64_t(3) << 20;
     std::vector<BrickResult> results(plan.bricks.size());
     std::vector<uint64_t> proxy_triangles(plan.bricks.size(), 0);
-    std::atomic<uint32_t> done{0};
-    const bool tty = StderrIsTerminal();
+    ProgressStage chart_progress("charts", sr.face_count, "faces");
     // kBricksInFlight workers take bricks in turn; each brick writes only its own files
     // and result slot, so which worker runs it does not matter.
     std::atomic<uint32_t> next{0};
@@ -238,14 +306,10 @@ Manifest Ingest(const IngestOptions& opt) {
                 failed = true;
                 throw;
             }
-            uint32_t n = ++done;
-            if (tty)
-                std::fprintf(stderr, "\r  charts: brick %u/%u (%s)   ", n, brick_count,
-                             FormatSeconds(Since(t2)).c_str());
+            chart_progress.Add(plan.bricks[b].face_count);
         }
     });
-    if (tty)
-        std::fprintf(stderr, "\n");
+    chart_progress.Finish();
     uint64_t splits = 0, holes = 0;
     std::array<double, kChartStageNames.size()> stage_seconds{};
     for (auto& r : results) {

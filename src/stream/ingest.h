@@ -28,6 +28,7 @@ struct IngestOptions {
     uint32_t lightmap_resolution = 2048;      // atlas side the texel size aims at
     double max_distortion = 0.05;             // Jacobian deviation that splits a chart
     bool force = false;                       // replace an existing bake directory
+    bool ground = false;                      // add a ground plane under the inputs (ground.h)
 };
 
 Manifest Ingest(const IngestOptions& opt);

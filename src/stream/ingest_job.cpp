@@ -129,9 +129,11 @@ std::string CheckIngestReusable(const IngestOptions& c) {
         return "ingest did not finish (state '" + m.state + "')";
     if (m.options.empty())
         return "the bake directory does not record its options";
-    if (m.inputs.size() != c.inputs.size())
+    // --ground adds itself as the last input (its option is compared below).
+    const size_t scans = m.inputs.size() - (m.ground ? 1 : 0);
+    if (scans != c.inputs.size())
         UsageError("{} was ingested from {} inputs, not {}; pass --force to start over", dir,
-                   m.inputs.size(), c.inputs.size());
+                   scans, c.inputs.size());
     // Everything but stdin first: reading stdin consumes it, so it is checked last, when
     // the only outcomes left are "reuse" and "refuse".
     for (size_t k = 0; k < c.inputs.size(); ++k) {
@@ -153,7 +155,9 @@ std::string CheckIngestReusable(const IngestOptions& c) {
         const std::string& name = key;  // clang 14 cannot capture a structured binding
         auto it = std::find_if(m.options.begin(), m.options.end(),
                                [&](const auto& kv) { return kv.first == name; });
-        const std::string had = it == m.options.end() ? "(none)" : it->second;
+        // Directories from before --ground existed have no ground.
+        const std::string had =
+            it != m.options.end() ? it->second : key == "ground" ? "0" : "(none)";
         if (had != value)
             UsageError("{} was ingested with {} {}, this run asks for {}; pass --force to start "
                        "over",

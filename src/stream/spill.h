@@ -55,6 +55,8 @@ public:
     io::MeshSink& BeginInput(const std::string& source);
     // Flushes all files; returns what was spilled.
     const SpillResult& Finish();
+    // What was spilled so far (counts, bounding box).
+    const SpillResult& result() const { return result_; }
 
     static std::string VerticesPath(const std::string& dir) { return dir + "/vertices.bin"; }
     static std::string ColorsPath(const std::string& dir) { return dir + "/colors.bin"; }
