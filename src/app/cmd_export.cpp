@@ -28,6 +28,8 @@ io::ExrCompression ParseCompression(const std::string& s) {
     UsageError("--compression '{}': expected zip, piz or none", s);
 }
 
+}  // namespace
+
 Vec3d ToVec3(const std::vector<double>& v, const char* option) {
     if (v.size() != 3)
         UsageError("{}: expected three numbers", option);
@@ -36,8 +38,6 @@ Vec3d ToVec3(const std::vector<double>& v, const char* option) {
             UsageError("{}: not a finite number", option);
     return Vec3d(v[0], v[1], v[2]);
 }
-
-}  // namespace
 
 int RunExport(const ExportCommand& c) {
     ThreadLimit limit(c.threads);

@@ -1,6 +1,7 @@
 // `mebake reference DIR --image OUT`: the path-traced picture of a view
 // (reference/reference_image.h), with render's camera options and default view, written as
 // a linear EXR (with coverage and per-pixel standard errors) and/or a tone-mapped PNG.
+#include "app/export_commands.h"
 #include "app/reference_commands.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -25,15 +26,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-Vec3d ToVec3(const std::vector<double>& v, const char* option) {
-    if (v.size() != 3)
-        UsageError("{}: expected three numbers", option);
-    for (double x : v)
-        if (!std::isfinite(x))
-            UsageError("{}: not a finite number", option);
-    return Vec3d(v[0], v[1], v[2]);
-}
 
 std::string Extension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();

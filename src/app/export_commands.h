@@ -3,11 +3,17 @@
 // mebake::Error.
 #pragma once
 
+#include "core/vec.h"
+
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace mebake::app {
+
+// A camera or colour option's three numbers as a vector; a usage error names the option
+// (render, export's views and the reference picture share the camera options).
+Vec3d ToVec3(const std::vector<double>& v, const char* option);
 
 struct ExportCommand {
     std::string dir;            // solved bake directory

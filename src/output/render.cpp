@@ -21,21 +21,6 @@ namespace {
 // Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
 constexpr float kPi = float(std::numbers::pi);
 
-Vec3f SkyRadiance(const solve::Sky& sky, const Vec3f& dir) {
-    switch (sky.type) {
-    case solve::Sky::Type::Uniform:
-        return Vec3f(sky.radiance);
-    case solve::Sky::Type::Overcast: {
-        // CIE overcast: L(theta) = Lz (1 + 2 cos theta) / 3 above the horizon.
-        const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
-        return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
-    }
-    case solve::Sky::Type::None:
-        break;
-    }
-    return Vec3f{};
-}
-
 }  // namespace
 
 // Charts of the object: all, or with --ground those inside the object's box (the ground's
@@ -176,7 +161,7 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
                 const size_t i = size_t(px) * size_t(k * k) + size_t(s);
                 const solve::Hit& h = hits[i];
                 if (h.geom_id == solve::kNoHit) {
-                    sum += opt.background ? *opt.background : SkyRadiance(view.scene.sky, dirs[i]);
+                    sum += opt.background ? *opt.background : solve::SkyRadiance(view.scene.sky, dirs[i]);
                     continue;
                 }
                 ++count;

@@ -17,15 +17,8 @@ constexpr uint32_t kMaxIntervals = 64;
 constexpr double kMinBandTexels = 2, kMaxBandTexels = 3;
 constexpr double kBrightPower = 4;  // brightness 2x -> weight 16x
 
-using Key = std::pair<uint64_t, uint64_t>;
-
-struct KeyHash {
-    size_t operator()(const Key& k) const {
-        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
-        h ^= h >> 31;
-        return size_t(h * 0xBF58476D1CE4E5B9ull);
-    }
-};
+using Key = IdPair;
+using KeyHash = IdPairHash;
 
 // One chart's side of an outline edge: where it lies in the chart and its field along it.
 struct Side {

@@ -19,10 +19,23 @@
 #include "output/seam_stitch.h"
 #include "stream/tile.h"
 
+#include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace mebake::output {
+
+// Two 64-bit ids as a hash-map key: a border edge's input vertices (smaller first), or a
+// vertex and a chart.
+using IdPair = std::pair<uint64_t, uint64_t>;
+struct IdPairHash {
+    size_t operator()(const IdPair& k) const {
+        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
+        h ^= h >> 31;
+        return size_t(h * 0xBF58476D1CE4E5B9ull);
+    }
+};
 
 struct BakeView;
 

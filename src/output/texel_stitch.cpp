@@ -16,15 +16,8 @@ constexpr uint32_t kMaxSamplesPerEdge = 256;
 constexpr int kMaxIterations = 500;
 constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
 
-using Key = std::pair<uint64_t, uint64_t>;
-
-struct KeyHash {
-    size_t operator()(const Key& k) const {
-        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
-        h ^= h >> 31;
-        return size_t(h * 0xBF58476D1CE4E5B9ull);
-    }
-};
+using Key = IdPair;
+using KeyHash = IdPairHash;
 
 Vec2d D(Vec2f v) {
     return {double(v.x), double(v.y)};

@@ -11,24 +11,11 @@ namespace mebake::reference {
 
 namespace {
 
-// What a camera ray that misses sees: render's rule (output/render.cpp), which shows the
+// What a camera ray that misses sees: the rule render uses too (solve::SkyRadiance), which shows the
 // overcast sky's horizon value below the horizon instead of black.
 Vec3f Background(const solve::Scene& scene, const std::optional<Vec3f>& background,
                  const Vec3f& dir) {
-    if (background)
-        return *background;
-    const solve::Sky& sky = scene.sky;
-    switch (sky.type) {
-    case solve::Sky::Type::Uniform:
-        return Vec3f(sky.radiance);
-    case solve::Sky::Type::Overcast: {
-        const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
-        return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
-    }
-    case solve::Sky::Type::None:
-        break;
-    }
-    return Vec3f{};
+    return background ? *background : solve::SkyRadiance(scene.sky, dir);
 }
 
 enum class RayEnd : uint8_t { Miss, Back, Front };

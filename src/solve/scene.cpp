@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -225,6 +226,20 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
         InputError({scene_file}, "{}", e.what());
     }
     return scene;
+}
+
+Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir) {
+    switch (sky.type) {
+    case Sky::Type::Uniform:
+        return Vec3f(sky.radiance);
+    case Sky::Type::Overcast: {
+        const float c = std::max(0.f, Dot(Normalize(dir), Vec3f(Normalize(sky.up))));
+        return Vec3f(sky.radiance) * ((1 + 2 * c) / 3);
+    }
+    case Sky::Type::None:
+        break;
+    }
+    return Vec3f{};
 }
 
 }  // namespace mebake::solve

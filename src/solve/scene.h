@@ -37,6 +37,11 @@ struct Sky {
     Vec3d up{0, 1, 0};
 };
 
+// Radiance the sky sends back along a ray leaving in direction dir (any length): uniform,
+// or CIE overcast L = Lz (1 + 2 cos theta) / 3 with the horizon's value below the horizon
+// (what a view shows of it; the solver's and the path tracer's light has no ground part).
+Vec3f SkyRadiance(const Sky& sky, const Vec3f& dir);
+
 struct SolverSettings {
     int order = 2;                // wavelet order M: 0 constant ... 3 cubic
     double tolerance = 0.02;      // relative error that triggers subdivision
