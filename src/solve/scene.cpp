@@ -125,6 +125,45 @@ void AddDefaultRig(Scene& scene, const Vec3d& bmin, const Vec3d& bmax) {
     scene.lights.push_back(key);
 }
 
+namespace {
+
+// The scene file's "lights": polygons with a radiance.
+void ReadLights(const json& lights, const std::string& scene_file, std::vector<PolygonLight>* out) {
+    int k = 0;
+    for (const auto& l : lights) {
+        std::string at = "lights[" + std::to_string(k++) + "]";
+        std::string type = l.value("type", "polygon");
+        if (type != "polygon")
+            InputError({scene_file}, "{}.type '{}': only 'polygon' lights exist", at, type);
+        PolygonLight pl;
+        for (const auto& v : l.at("vertices"))
+            pl.vertices.push_back(ReadVec3(v, scene_file, at + ".vertices"));
+        if (pl.vertices.size() < 3 || pl.vertices.size() > 64)
+            InputError({scene_file}, "{}.vertices: a polygon needs 3 to 64 vertices", at);
+        pl.radiance = ReadVec3(l.at("radiance"), scene_file, at + ".radiance");
+        pl.two_sided = l.value("two_sided", false);
+        out->push_back(pl);
+    }
+}
+
+// The scene file's "solver" settings, over the defaults in *o.
+void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSettings* o) {
+    o->order = s.value("order", o->order);
+    o->tolerance = s.value("tolerance", o->tolerance);
+    o->max_bounces = s.value("max_bounces", o->max_bounces);
+    o->stop_fraction = s.value("stop_fraction", o->stop_fraction);
+    o->sky_directions = s.value("sky_directions", o->sky_directions);
+    o->light_samples = s.value("light_samples", o->light_samples);
+    o->cluster_links = s.value("cluster_links", o->cluster_links);
+    if (o->order < 0 || o->order > 3) InputError({scene_file}, "solver.order must be 0..3");
+    const std::string multi = s.value("multi_emitter", std::string("full"));
+    if (multi != "full" && multi != "simplify")
+        InputError({scene_file}, "solver.multi_emitter '{}': expected full or simplify", multi);
+    o->multi_emitter_simplify = multi == "simplify";
+}
+
+}  // namespace
+
 Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file) {
     Scene scene;
     for (const auto& in : manifest.inputs) {
@@ -178,23 +217,7 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
                 }
             }
         }
-        if (j.contains("lights")) {
-            int k = 0;
-            for (const auto& l : j["lights"]) {
-                std::string at = "lights[" + std::to_string(k++) + "]";
-                std::string type = l.value("type", "polygon");
-                if (type != "polygon")
-                    InputError({scene_file}, "{}.type '{}': only 'polygon' lights exist", at, type);
-                PolygonLight pl;
-                for (const auto& v : l.at("vertices"))
-                    pl.vertices.push_back(ReadVec3(v, scene_file, at + ".vertices"));
-                if (pl.vertices.size() < 3 || pl.vertices.size() > 64)
-                    InputError({scene_file}, "{}.vertices: a polygon needs 3 to 64 vertices", at);
-                pl.radiance = ReadVec3(l.at("radiance"), scene_file, at + ".radiance");
-                pl.two_sided = l.value("two_sided", false);
-                scene.lights.push_back(pl);
-            }
-        }
+        if (j.contains("lights")) ReadLights(j["lights"], scene_file, &scene.lights);
         if (j.contains("sky")) {
             const auto& s = j["sky"];
             std::string type = s.value("type", "uniform");
@@ -206,22 +229,7 @@ Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file)
         }
         if (j.value("default_rig", false))
             AddObjectRig(scene, manifest);
-        if (j.contains("solver")) {
-            const auto& s = j["solver"];
-            auto& o = scene.solver;
-            o.order = s.value("order", o.order);
-            o.tolerance = s.value("tolerance", o.tolerance);
-            o.max_bounces = s.value("max_bounces", o.max_bounces);
-            o.stop_fraction = s.value("stop_fraction", o.stop_fraction);
-            o.sky_directions = s.value("sky_directions", o.sky_directions);
-            o.light_samples = s.value("light_samples", o.light_samples);
-            o.cluster_links = s.value("cluster_links", o.cluster_links);
-            if (o.order < 0 || o.order > 3) InputError({scene_file}, "solver.order must be 0..3");
-            const std::string multi = s.value("multi_emitter", std::string("full"));
-            if (multi != "full" && multi != "simplify")
-                InputError({scene_file}, "solver.multi_emitter '{}': expected full or simplify", multi);
-            o.multi_emitter_simplify = multi == "simplify";
-        }
+        if (j.contains("solver")) ReadSolverSettings(j["solver"], scene_file, &scene.solver);
     } catch (const json::exception& e) {
         InputError({scene_file}, "{}", e.what());
     }
