@@ -50,9 +50,10 @@ TEST(MappedCache, RegionsOfAnySizeReadBackTheirPieces) {
         for (uint32_t k = 0; k < sizes.size(); ++k) {
             EXPECT_EQ(cache.region_bytes(k), sizes[k]);
             const RegionPin pin = cache.Pin(k);
-            if (sizes[k] > 0)  // an empty vector's data() may be null
+            if (sizes[k] > 0) {  // an empty vector's data() may be null
                 EXPECT_EQ(std::memcmp(cache.Data(k), data[k].data(), sizes[k]), 0)
                     << "region " << k;
+            }
         }
         // The file has no name: the directory stays empty.
         EXPECT_TRUE(fs::is_empty(dir));
