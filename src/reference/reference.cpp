@@ -529,7 +529,7 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
         ParallelFor(0, int64_t(points.size()), [&](int64_t i) {
             ReferencePoint& p = points[size_t(i)];
             Accum& a = acc[size_t(i)];
-            const uint64_t todo = want[size_t(i)] - a.n;
+            const uint64_t paths_here = want[size_t(i)] - a.n;  // for the progress count
             for (uint64_t s = a.n; s < want[size_t(i)]; ++s) {
                 Rng rng(opt.seed, p.stream == ReferencePoint::kIndexStream ? uint64_t(i) : p.stream,
                         s);
@@ -563,7 +563,7 @@ ReferenceStats ReferenceTracer::Estimate(std::vector<ReferencePoint>& points,
                 }
             }
             p.samples = a.n;
-            stage.Add(todo);
+            stage.Add(paths_here);
         });
         stage.Finish();
         ++st.rounds;

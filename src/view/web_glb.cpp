@@ -78,18 +78,15 @@ uint32_t WebGlb::View(std::span<const uint8_t> bytes, size_t count, size_t strid
         std::vector<uint8_t> enc;
         const char* mode = "ATTRIBUTES";
         const auto* idx = reinterpret_cast<const uint32_t*>(bytes.data());
+        size_t max_index = 0;
+        for (size_t i = 0; indices && i < count; ++i)
+            max_index = std::max<size_t>(max_index, idx[i]);
         if (indices && count % 3 == 0 && !vertex_data) {
             mode = "TRIANGLES";
-            size_t max_index = 0;
-            for (size_t i = 0; i < count; ++i)
-                max_index = std::max<size_t>(max_index, idx[i]);
             enc.resize(meshopt_encodeIndexBufferBound(count, max_index + 1));
             enc.resize(meshopt_encodeIndexBuffer(enc.data(), enc.size(), idx, count));
         } else if (indices) {
             mode = "INDICES";
-            size_t max_index = 0;
-            for (size_t i = 0; i < count; ++i)
-                max_index = std::max<size_t>(max_index, idx[i]);
             enc.resize(meshopt_encodeIndexSequenceBound(count, max_index + 1));
             enc.resize(meshopt_encodeIndexSequence(enc.data(), enc.size(), idx, count));
         } else {
