@@ -43,7 +43,7 @@ struct SolveOptions {
     float ray_offset = 1e-4f;       // absolute; callers add the proxy's deviation
     float scene_size = 1;           // bounding-box diagonal
     int min_level = 2;              // quadtrees start this deep
-    int sky_level = 4;              // the sky is gathered at this level (smooth light)
+    int sky_level = 4;              // the sky is gathered at this level (leaves split to it)
     size_t max_nodes_per_chart = 8192;  // refinement budget per chart
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
