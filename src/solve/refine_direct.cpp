@@ -3,7 +3,7 @@
 // steps: DirectSampler evaluates the light at a node's Gauss points and control grid,
 // FitDirectLights refines where a node's polynomial misses its control points (largest
 // integrated error first, within the chart's node budget), GatherSky adds the sky at a
-// fixed level and pushes it down.
+// fixed level, deeper where its fit misses, and pushes it down.
 #include "core/check.h"
 #include "core/log.h"
 #include "solve/direct.h"
@@ -58,9 +58,8 @@ public:
         const size_t probes = OrderPoints(node, control, n_gauss, n_ctrl);
         SamplePoints(node, gl, n_gauss, probes);
         e9_all_.assign(all_pts_.size() * 9, 0.f);
-        if (direct_.has_lights())
-            direct_.Evaluate(all_pts_, e9_all_, DirectLight::kLights, probes, &probe_cache_, keys_,
-                             known);
+        if (parts == DirectLight::kSky ? direct_.has_sky() : direct_.has_lights())
+            direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known);
         ToGaussAndControl(n_gauss, n_ctrl, control);
     }
 
@@ -69,6 +68,7 @@ public:
     // Per light, as DirectLight::Evaluate's `known` (empty: every light traced).
     std::vector<uint8_t> known;
     bool use_probes = true;  // false: no shared visibility and no cache (masked evaluations)
+    int parts = DirectLight::kLights;  // or kSky (GatherSky)
 
 private:
     // Chart coordinates of point idx: Gauss points 0..n_gauss-1, then the control grid.
@@ -228,7 +228,8 @@ void Solver::RefineDirect(uint32_t chart) {
     spdlog::debug("chart {}: direct light refined to {} nodes (depth cap {})", chart,
                   fields_[chart].node_count(), max_level);
     if (direct.has_sky())
-        GatherSky(chart, direct, std::min(max_level, std::max(0, opt_.sky_level + size_levels)));
+        GatherSky(chart, direct, std::min(max_level, std::max(0, opt_.sky_level + size_levels)),
+                  max_level);
 }
 
 // One node under --multi-emitter simplify (seed 002, section 5): its fit into coeffs, and
@@ -363,42 +364,53 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
     field.Pull();
 }
 
-// The sky is smooth lighting sampled by discrete directions: its quadrature steps are not
-// detail worth refining for. It is gathered at sky_level and pushed down, like indirect
-// light; leaves above sky_level are split down to it first (within the node budget).
-// Gathered at the leaves the lights left, the sky was sampled at min_level where no light
-// refined (the side away from the key, creases, undersides): 3 x 3 points per node
-// missed where the sky's visibility turns (the bunny under the sky alone: RMS 9.6 %,
-// mean -3.3 %, 2.4 % with the split; bench/RESULTS.md, "Issue 14 (session 6)").
-void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level) {
-    const SolveChart& sc = charts_[chart];
+// The sky is gathered at sky_level and pushed down, like indirect light; leaves above
+// sky_level are split down to it first (within the node budget). Gathered at the leaves
+// the lights left, it was sampled at min_level where no light refined (the side away from
+// the key, creases, undersides), and 3 x 3 points per node missed where its visibility
+// turns: the bunny under the sky alone had RMS 9.6 %, mean -3.3 % (bench/RESULTS.md,
+// "Issue 14 (session 6)"). Below sky_level a node is split, up to kSkyExtraLevels deeper,
+// where its fit misses the sky at its control grid by more than the tolerance (scale as in
+// FitDirectLights); smaller quadrature steps of the fixed directions are not detail worth
+// refining for.
+void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level) {
+    constexpr int kSkyExtraLevels = 2;
     ChartField& field = fields_[chart];
-    const int order = field.order(), blocks = field.blocks(), ng = order + 1;
-    std::vector<size_t> targets, stack(1, 0);
+    const int order = field.order(), blocks = field.blocks(), ng = order + 1, gc = order + 2;
+    const int deepest = std::min(max_level, sky_level + kSkyExtraLevels);
+    const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
+    DirectSampler sampler(*this, charts_[chart], order, max_level, direct);
+    sampler.parts = DirectLight::kSky;
+    sampler.use_probes = false;
+    std::vector<float> coeffs(size_t(field.stride()));
+    std::vector<size_t> stack(1, 0);
     while (!stack.empty()) {
-        size_t n = stack.back();
+        const size_t n = stack.back();
         stack.pop_back();
-        if (field.node(n).leaf() && int(field.node(n).level) < sky_level &&
-            field.node_count() + 4 <= opt_.max_nodes_per_chart)
+        const bool room = field.node_count() + 4 <= opt_.max_nodes_per_chart;
+        if (field.node(n).leaf() && int(field.node(n).level) < sky_level && room)
             field.Subdivide(n);
-        const QuadNode& node = field.node(n);
-        if (node.leaf() || int(node.level) >= sky_level) {
-            targets.push_back(n);
+        const QuadNode node = field.node(n);
+        bool split = !node.leaf() && int(node.level) < sky_level;
+        if (!split) {
+            const bool test = int(node.level) < deepest && (!node.leaf() || room);
+            sampler.Evaluate(node, test);
+            ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+            if (test) {
+                const float scale = std::max(
+                    {MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
+                split = ControlGridError(order, gc, coeffs.data(), blocks,
+                                         sampler.ctrl_vals.data()) > tol * scale;
+                if (split && node.leaf())
+                    field.Subdivide(n);
+            }
+        }
+        if (split) {
+            const int32_t first = field.node(n).first_child;
+            for (int c = 3; c >= 0; --c)
+                stack.push_back(size_t(first + c));
             continue;
         }
-        for (int c = 3; c >= 0; --c)
-            stack.push_back(size_t(node.first_child + c));
-    }
-    std::vector<ReceiverPoint> pts;
-    std::vector<Vec3f> albedo;
-    std::vector<float> e9, vals, coeffs(size_t(field.stride()));
-    for (size_t n : targets) {
-        const QuadNode node = field.node(n);
-        GaussPoints(sc, node, ng, true, &pts, &albedo);
-        e9.assign(pts.size() * 9, 0.f);
-        direct.Evaluate(pts, e9, DirectLight::kSky);
-        ToFieldValues(pts, albedo, e9, opt_.settings.radiosity, &vals);
-        ProjectGauss(order, ng, vals.data(), blocks, coeffs.data());
         float* pend = field.pending(n);
         for (int k = 0; k < field.stride(); ++k)
             pend[k] += coeffs[size_t(k)];

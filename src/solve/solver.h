@@ -43,7 +43,7 @@ struct SolveOptions {
     float ray_offset = 1e-4f;       // absolute; callers add the proxy's deviation
     float scene_size = 1;           // bounding-box diagonal
     int min_level = 2;              // quadtrees start this deep
-    int sky_level = 4;              // the sky is gathered at this level (leaves split to it)
+    int sky_level = 4;              // the sky is gathered from this level down (GatherSky)
     size_t max_nodes_per_chart = 8192;  // refinement budget per chart
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
@@ -164,7 +164,7 @@ private:
                          SimplifiedFit* simplified);
     float SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
                          SimplifiedFit& sf, std::vector<float>& coeffs);
-    void GatherSky(uint32_t chart, DirectLight& direct, int sky_level);
+    void GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
                 const std::vector<std::vector<float>>& links);
