@@ -42,6 +42,7 @@ stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     opt.max_distortion = c.max_distortion;
     opt.force = c.force;
     opt.ground = c.ground;
+    opt.orient = !c.keep_winding;
     return opt;
 }
 

@@ -39,6 +39,7 @@ struct IngestCommand {
     double max_distortion = 0.05;
     bool force = false;
     bool ground = false;
+    bool keep_winding = false;  // no orientation pass (stream/orient.h)
 };
 int RunIngest(const IngestCommand& opt);
 

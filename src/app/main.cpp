@@ -113,6 +113,10 @@ int main(int argc, char** argv) {
     ing_cmd->add_flag("--ground", ing.ground,
                       "Add a ground plane under the scans (at the bounding box's floor, +Y up, "
                       "3x the object's width, albedo 0.4)");
+    ing_cmd->add_flag("--keep-winding", ing.keep_winding,
+                      "Keep every component's winding as read. Default: a closed or nearly closed "
+                      "component wound inwards (negative enclosed volume) is turned outwards, "
+                      "unless its box contains or lies in another's (a room, a cavity)");
 
     // solve
     mebake::app::SolveCommand sol;

@@ -83,6 +83,10 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
     }
     j["surface_area"] = m.surface_area;
     j["brick_count"] = m.brick_count;
+    j["orientation"] = {{"components", m.orientation.components},
+                        {"flipped", m.orientation.flipped},
+                        {"flipped_triangles", m.orientation.flipped_triangles},
+                        {"nested_kept", m.orientation.nested_kept}};
     j["charts"] = json::array();
     for (const auto& c : m.charts)
         j["charts"].push_back({{"brick", c.brick},
@@ -157,6 +161,13 @@ Manifest ReadManifest(const std::string& dir) {
         m.object_bbox_max = m.ground ? ToVec3d(j.at("object_bbox").at(1)) : m.bbox_max;
         m.surface_area = j.at("surface_area");
         m.brick_count = j.at("brick_count");
+        if (j.contains("orientation")) {
+            const auto& o = j.at("orientation");
+            m.orientation.components = o.at("components");
+            m.orientation.flipped = o.at("flipped");
+            m.orientation.flipped_triangles = o.at("flipped_triangles");
+            m.orientation.nested_kept = o.at("nested_kept");
+        }
         for (const auto& c : j.at("charts")) {
             ChartRecord r;
             r.brick = c.at("brick");

@@ -74,6 +74,11 @@ struct Manifest {
     Vec3d object_bbox_min{}, object_bbox_max{};
     double surface_area = 0;
     uint32_t brick_count = 0;
+    // Pass 2b (orient.h): components, those turned outwards and their triangles, and those
+    // inside out but nested in another (kept). All 0 when the pass was switched off.
+    struct Orientation {
+        uint64_t components = 0, flipped = 0, flipped_triangles = 0, nested_kept = 0;
+    } orientation;
     std::vector<ChartRecord> charts;
     uint64_t proxy_triangles = 0;
     // Largest distance of a proxy point from the input surface (0: the full mesh) and the

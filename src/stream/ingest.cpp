@@ -12,6 +12,7 @@
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
 #include "stream/ground.h"
+#include "stream/orient.h"
 #include "stream/proxy_cluster.h"
 #include "stream/spill.h"
 
@@ -272,6 +273,17 @@ Manifest Ingest(const IngestOptions& opt) {
     spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
                  plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
                  FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
+
+    // Pass 2b: components wound inwards turned outwards (orient.h).
+    if (opt.orient) {
+        auto t = Clock::now();
+        ProgressStage progress("orient", sr.face_count, "faces");
+        const OrientReport r = OrientOutwards(dir, plan, sr.bbox_min, sr.bbox_max, &progress);
+        progress.Finish();
+        m.orientation = {r.components, r.flipped_components, r.flipped_triangles,
+                         r.nested_kept};
+        m.timings.emplace_back("orient", Since(t));
+    }
 
     // Pass 3: charts, bricks in parallel (each writes only its own files).
     auto t2 = Clock::now();
