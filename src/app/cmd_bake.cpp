@@ -12,6 +12,7 @@
 #include "solve/solve_job.h"
 #include "stream/bake_dir.h"
 #include "stream/ingest_job.h"
+#include "stream/up_axis.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -30,6 +31,16 @@ uint64_t ParseMemory(const std::string& text) {
     return *bytes;
 }
 
+// --up: an axis name, or detected when not given.
+std::optional<Vec3d> UpOption(const std::string& name) {
+    if (name.empty())
+        return std::nullopt;
+    const auto axis = stream::ParseAxis(name);
+    if (!axis)
+        UsageError("--up {}: expected x, y, z, -x, -y or -z", name);
+    return axis;
+}
+
 stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     stream::IngestOptions opt;
     opt.inputs = c.inputs;
@@ -43,6 +54,7 @@ stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     opt.force = c.force;
     opt.ground = c.ground;
     opt.orient = !c.keep_winding;
+    opt.up = UpOption(c.up);
     return opt;
 }
 
@@ -92,6 +104,7 @@ int RunBake(const BakeCommand& c) {
     o.max_bounces = c.max_bounces;
     o.lightmap_resolution = c.lightmap_resolution;
     o.ground = c.ground;
+    o.up = UpOption(c.up);
     o.checkpoint_interval = c.checkpoint_interval;
     o.force = c.force;
     output::RunBakeJob(o);

@@ -81,6 +81,7 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
         j["ground"] = true;
         j["object_bbox"] = {Vec(m.object_bbox_min), Vec(m.object_bbox_max)};
     }
+    j["up"] = Vec(m.up);
     j["surface_area"] = m.surface_area;
     j["brick_count"] = m.brick_count;
     j["orientation"] = {{"components", m.orientation.components},
@@ -159,6 +160,8 @@ Manifest ReadManifest(const std::string& dir) {
         m.ground = j.value("ground", false);
         m.object_bbox_min = m.ground ? ToVec3d(j.at("object_bbox").at(0)) : m.bbox_min;
         m.object_bbox_max = m.ground ? ToVec3d(j.at("object_bbox").at(1)) : m.bbox_max;
+        if (j.contains("up"))
+            m.up = ToVec3d(j.at("up"));
         m.surface_area = j.at("surface_area");
         m.brick_count = j.at("brick_count");
         if (j.contains("orientation")) {

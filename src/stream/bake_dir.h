@@ -72,6 +72,9 @@ struct Manifest {
     // the inputs' without it (the default camera and light frame the object).
     bool ground = false;
     Vec3d object_bbox_min{}, object_bbox_max{};
+    // The scans' up axis: --up, else detected (up_axis.h); the default rig, camera and
+    // ground stand on it. Directories from before it was recorded: +Y.
+    Vec3d up{0, 1, 0};
     double surface_area = 0;
     uint32_t brick_count = 0;
     // Pass 2b (orient.h): components, those turned outwards and their triangles, and those

@@ -15,6 +15,7 @@
 #include "stream/orient.h"
 #include "stream/proxy_cluster.h"
 #include "stream/spill.h"
+#include "stream/up_axis.h"
 
 #include <algorithm>
 #include <atomic>
@@ -175,6 +176,26 @@ uint64_t InputBytes(const std::vector<std::string>& inputs) {
     return total;
 }
 
+// The scans' up direction (up_axis.h): --up, else detected from the vertices spilled so far.
+Vec3d ChooseUp(const IngestOptions& opt, Spill& spill, const std::string& dir) {
+    if (opt.up) {
+        spdlog::info("up: {} (--up)", AxisName(*opt.up));
+        return *opt.up;
+    }
+    const SpillResult& sr = spill.Finish();  // flushed, so the vertices can be read back
+    if (sr.vertex_count == 0)
+        return Vec3d(0, 1, 0);
+    const UpAxis up = DetectUpAxis(dir, sr.vertex_count, sr.bbox_min, sr.bbox_max,
+                                   size_t(4) << 20);
+    if (up.detected)
+        spdlog::info("up: {} detected (support {:.2f}, next {:.2f}; --up overrides)",
+                     AxisName(up.up), up.support, up.runner_up);
+    else
+        spdlog::info("up: +y, the default (no clear support: best {:.2f}; --up overrides)",
+                     up.support);
+    return up.up;
+}
+
 }  // namespace
 
 Manifest Ingest(const IngestOptions& opt) {
@@ -210,8 +231,10 @@ Manifest Ingest(const IngestOptions& opt) {
         progress.Finish();
         m.object_bbox_min = spill.result().bbox_min;
         m.object_bbox_max = spill.result().bbox_max;
+        m.up = ChooseUp(opt, spill, dir);
         if (opt.ground && spill.result().face_count > 0) {
-            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, spill.BeginInput(kGroundSource));
+            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, m.up,
+                             spill.BeginInput(kGroundSource));
             m.ground = true;
         }
         sr = spill.Finish();
@@ -262,7 +285,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // The ground takes no light-map resolution from the scans: the texel size follows from
     // their area alone (the atlas grows by the ground's share).
     const double ground_area =
-        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max) : 0.0;
+        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max, m.up) : 0.0;
     const double texel_area =
         std::max(plan.surface_area - ground_area, 1e-3 * plan.surface_area);
     m.texel_size = opt.texel_size > 0

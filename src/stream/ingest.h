@@ -30,6 +30,7 @@ struct IngestOptions {
     double max_distortion = 0.05;             // Jacobian deviation that splits a chart
     bool force = false;                       // replace an existing bake directory
     bool ground = false;                      // add a ground plane under the inputs (ground.h)
+    std::optional<Vec3d> up;                  // the scans' up axis; none: detected (up_axis.h)
     bool orient = true;                       // turn inside-out components outwards (orient.h)
 };
 
