@@ -33,6 +33,11 @@ bool IsBakeDirectory(const std::string& path) {
     return std::filesystem::is_directory(path) && std::filesystem::exists(ManifestPath(path));
 }
 
+std::string BakeDirectoryIn(const std::string& path) {
+    const std::string inner = (std::filesystem::path(path) / "scene.mebake").string();
+    return !IsBakeDirectory(path) && IsBakeDirectory(inner) ? inner : path;
+}
+
 namespace {
 json Vec(const Vec3d& v) {
     return {v.x, v.y, v.z};

@@ -101,6 +101,9 @@ void WriteManifest(const std::string& dir, const Manifest& m);
 // Throws Error(Io) if missing, Error(Corrupt) naming the file if malformed.
 Manifest ReadManifest(const std::string& dir);
 bool IsBakeDirectory(const std::string& path);
+// The output directory of `mebake bake` holds its bake directory as scene.mebake: that one;
+// any other path as it is.
+std::string BakeDirectoryIn(const std::string& path);
 
 // Size and CRC-32 of a whole file ("-": all of stdin), read sequentially. Throws
 // Error(Io) naming it.
