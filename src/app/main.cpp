@@ -330,11 +330,13 @@ int main(int argc, char** argv) {
     cmp_cmd->footer("Example:\n  mebake compare scene.mebake ref.json\n"
                     "  mebake compare view.exr ref.exr --diff diff.png");
     exp_cmd->footer("Example:\n  mebake export scene.mebake --lightmap lm.exr --mesh lit.glb "
-                    "--vertex-colors lit.ply");
+                    "--vertex-colors lit.ply\n"
+                    "  mebake export out/ --mesh lit.obj    (out/ made by `mebake bake`)");
     vw_cmd->footer("Example:\n  mebake view out/rock    (then open http://127.0.0.1:8080/)\n"
                    "  http://127.0.0.1:8080/?eye=0,1,3.4&target=0,1,0&fov=40&mode=glossy");
     ren_cmd->footer("Example:\n  mebake render scene.mebake --eye 0,1,3 --target 0,0,0 -o view.png "
-                    "--glossy");
+                    "--glossy\n"
+                    "  mebake render out/ -o view.png --size 1280x960    (out/ made by `mebake bake`)");
     bk_cmd->footer("Example:\n  mebake bake scan.ply -o out/    (rerun the same command to resume)\n"
                    "  tools/mkscan --triangles 1000000 | mebake bake - -o out/");
 

@@ -214,6 +214,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // Pass 1: spill.
     auto t0 = Clock::now();
     SpillResult sr;
+    double up_seconds = 0;
     {
         // Scoped: the spill's page caches are freed before the passes that follow.
         // Appends only: a few pages per file are enough to write in large blocks.
@@ -231,7 +232,9 @@ Manifest Ingest(const IngestOptions& opt) {
         progress.Finish();
         m.object_bbox_min = spill.result().bbox_min;
         m.object_bbox_max = spill.result().bbox_max;
+        const auto t_up = Clock::now();
         m.up = ChooseUp(opt, spill, dir);
+        up_seconds = Since(t_up);
         if (opt.ground && spill.result().face_count > 0) {
             WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, m.up,
                              spill.BeginInput(kGroundSource));
@@ -257,6 +260,7 @@ Manifest Ingest(const IngestOptions& opt) {
     m.bbox_min = sr.bbox_min;
     m.bbox_max = sr.bbox_max;
     m.timings.emplace_back("spill", Since(t0));
+    m.timings.emplace_back("spill.up", up_seconds);  // of which the up axis (up_axis.h)
     if (sr.face_count == 0)
         InputError({opt.inputs[0]}, "the input has no faces to bake onto");
     spdlog::info("spilled {} vertices, {} triangles in {} (peak memory {})",

@@ -247,8 +247,8 @@ json SkyJson(const solve::Sky& sky) {
 std::string ResolveBakeDirectory(const std::string& dir) {
     if (const std::string found = stream::BakeDirectoryIn(dir); stream::IsBakeDirectory(found))
         return found;
-    if (!fs::exists(dir))
-        UsageError("{}: no such directory", dir);
+    if (!fs::exists(dir))  // a missing input, as for the other commands (exit 1)
+        IoError({dir}, "no such directory");
     UsageError("{}: not a bake directory (no manifest.json, nor scene.mebake/manifest.json); "
                "make one with `mebake bake` or `mebake ingest`",
                dir);
