@@ -11,8 +11,8 @@
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
-#include "stream/bake_dir.h"
 #include "io/mesh_stats.h"
+#include "stream/bake_dir.h"
 
 namespace mebake::app {
 

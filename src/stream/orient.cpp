@@ -114,8 +114,8 @@ BrickPieces ScanBrick(const std::string& dir, uint32_t brick, const Vec3d& origi
             v[k] = Vec3d(m.position[m.triangles[f][size_t(k)]]) - origin;
             p.shared |= on_cut[m.triangles[f][size_t(k)]] != 0;
         }
-        if (!std::isfinite(v[0].x + v[0].y + v[0].z + v[1].x + v[1].y + v[1].z + v[2].x +
-                           v[2].y + v[2].z))
+        if (!std::isfinite(v[0].x + v[0].y + v[0].z + v[1].x + v[1].y + v[1].z + v[2].x + v[2].y +
+                           v[2].z))
             continue;  // repair drops it
         const Vec3d n = Cross(v[1] - v[0], v[2] - v[0]) * 0.5;
         const double a = Length(n);
@@ -219,8 +219,8 @@ OrientReport OrientOutwards(const std::string& dir, const BrickPlan& plan, const
             const Shape s = Measure(comps[c]);
             spdlog::debug("orientation: component of {} triangles ({:.1f} % of the area): "
                           "openness {:.3f}, volume ratio {:+.3f}",
-                          comps[c].triangles, 100 * comps[c].area / plan.surface_area,
-                          s.openness, s.volume_ratio);
+                          comps[c].triangles, 100 * comps[c].area / plan.surface_area, s.openness,
+                          s.volume_ratio);
         }
         if (!InsideOut(comps[c]))
             continue;
@@ -235,8 +235,8 @@ OrientReport OrientOutwards(const std::string& dir, const BrickPlan& plan, const
         spdlog::debug("orientation: turning outwards {} triangles in the box [{:.4g} {:.4g} "
                       "{:.4g}] - [{:.4g} {:.4g} {:.4g}]",
                       comps[c].triangles, comps[c].lo.x + origin.x, comps[c].lo.y + origin.y,
-                      comps[c].lo.z + origin.z, comps[c].hi.x + origin.x,
-                      comps[c].hi.y + origin.y, comps[c].hi.z + origin.z);
+                      comps[c].lo.z + origin.z, comps[c].hi.x + origin.x, comps[c].hi.y + origin.y,
+                      comps[c].hi.z + origin.z);
         flip[c] = 1;
         ++report.flipped_components;
         report.flipped_triangles += comps[c].triangles;
@@ -254,10 +254,9 @@ OrientReport OrientOutwards(const std::string& dir, const BrickPlan& plan, const
     }
     spdlog::info("orientation: {} component(s), {} turned outwards ({} triangles){}",
                  report.components, report.flipped_components, report.flipped_triangles,
-                 report.nested_kept
-                     ? fmt::format(", {} inside out but nested in another, kept",
-                                   report.nested_kept)
-                     : std::string());
+                 report.nested_kept ? fmt::format(", {} inside out but nested in another, kept",
+                                                  report.nested_kept)
+                                    : std::string());
     return report;
 }
 

@@ -24,11 +24,11 @@
 // that touches a shared vertex, is large (>= kKeptArea of the surface) or is a candidate.
 #pragma once
 
-#include <cstdint>
-#include <string>
-
 #include "core/progress.h"
 #include "stream/bricks.h"
+
+#include <cstdint>
+#include <string>
 
 namespace mebake::stream {
 
@@ -38,10 +38,10 @@ inline constexpr double kNestedArea = 0.01;
 inline constexpr double kKeptArea = 1e-4;
 
 struct OrientReport {
-    uint64_t components = 0;          // connected components of the whole mesh
+    uint64_t components = 0;  // connected components of the whole mesh
     uint64_t flipped_components = 0;
     uint64_t flipped_triangles = 0;
-    uint64_t nested_kept = 0;         // inside out but nested: left as they are
+    uint64_t nested_kept = 0;  // inside out but nested: left as they are
 };
 
 // Decides and applies (rewrites the bricks of flipped components). Deterministic: the same

@@ -56,7 +56,9 @@ UpAxis DetectUpAxis(const std::string& dir, uint64_t vertex_count, const Vec3d& 
     for (auto& c : cells)
         c.assign(size_t(kGrid) * kGrid, 0);
     DiskArray<Vec3f> vertices(Spill::VerticesPath(dir), false, cache_bytes);
-    auto cell = [](double t) { return std::clamp(int(t * kGrid), 0, kGrid - 1); };
+    auto cell = [](double t) {
+        return std::clamp(int(t * kGrid), 0, kGrid - 1);
+    };
     for (uint64_t i = 0; i < vertex_count; ++i) {
         const Vec3d p(vertices.Get(i));
         if (!std::isfinite(p.x + p.y + p.z))

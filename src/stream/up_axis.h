@@ -14,11 +14,11 @@
 // Memory: one occupancy grid of kGrid^2 cells per direction; one pass over the vertices.
 #pragma once
 
+#include "core/vec.h"
+
 #include <cstdint>
 #include <optional>
 #include <string>
-
-#include "core/vec.h"
 
 namespace mebake::stream {
 
@@ -28,9 +28,9 @@ inline constexpr double kMargin = 1.5;
 
 struct UpAxis {
     Vec3d up{0, 1, 0};
-    double support = 0;         // the largest support ratio
-    double runner_up = 0;       // the next largest
-    bool detected = false;      // false: the default +Y
+    double support = 0;     // the largest support ratio
+    double runner_up = 0;   // the next largest
+    bool detected = false;  // false: the default +Y
 };
 
 // From the spilled vertices [0, vertex_count) of <dir>/vertices.bin within the box.

@@ -6,7 +6,6 @@
 #include "stream/tile.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -17,6 +16,7 @@
 #include <map>
 #include <string>
 #include <tuple>
+#include <unistd.h>
 #include <vector>
 
 namespace mebake::stream {
@@ -43,8 +43,9 @@ struct Mesh {
 // The surface of the cube [-1, 1]^3 as an n x n grid per side (shared vertices), wound
 // outwards; `shape` maps each grid point (a sphere: normalize). Triangles whose centroid
 // `keep` refuses are left out.
-Mesh CubeGrid(int n, const std::function<Vec3d(Vec3d)>& shape,
-              const std::function<bool(Vec3d)>& keep = [](Vec3d) { return true; }) {
+Mesh CubeGrid(
+    int n, const std::function<Vec3d(Vec3d)>& shape,
+    const std::function<bool(Vec3d)>& keep = [](Vec3d) { return true; }) {
     Mesh m;
     std::map<std::tuple<int, int, int>, uint32_t> ids;
     auto vertex = [&](int a, int b, int c) {
@@ -100,8 +101,8 @@ Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint
     {
         std::ofstream out(ply);
         out << "ply\nformat ascii 1.0\nelement vertex " << m.v.size()
-            << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
-            << m.f.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+            << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << m.f.size()
+            << "\nproperty list uchar int vertex_indices\nend_header\n";
         for (const auto& p : m.v)
             out << p.x << ' ' << p.y << ' ' << p.z << '\n';
         for (const auto& t : m.f)
@@ -129,7 +130,9 @@ Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint
     return r;
 }
 
-const auto kCube = [](Vec3d p) { return p; };
+const auto kCube = [](Vec3d p) {
+    return p;
+};
 
 TEST(Orient, ClosedCubeWoundInwardsComesOutOutwards) {
     Mesh cube = CubeGrid(8, kCube);
