@@ -143,6 +143,11 @@ int RunBakeInfo(const std::string& dir, bool json) {
         j["vertices"] = m.vertex_count;
         j["triangles"] = m.face_count;
         j["bricks"] = m.brick_count;
+        j["up"] = {m.up.x, m.up.y, m.up.z};
+        j["orientation"] = {{"components", m.orientation.components},
+                            {"flipped", m.orientation.flipped},
+                            {"flipped_triangles", m.orientation.flipped_triangles},
+                            {"nested_kept", m.orientation.nested_kept}};
         j["charts"] = nc;
         j["texel_size"] = m.texel_size;
         j["distortion_mean"] = area > 0 ? dist_mean / area : 0;
@@ -168,6 +173,11 @@ int RunBakeInfo(const std::string& dir, bool json) {
     std::printf("bounds          (%g, %g, %g) - (%g, %g, %g)\n", m.bbox_min.x, m.bbox_min.y,
                 m.bbox_min.z, m.bbox_max.x, m.bbox_max.y, m.bbox_max.z);
     std::printf("surface area    %g\n", m.surface_area);
+    std::printf("up              %s\n", stream::AxisName(m.up).c_str());
+    std::printf("orientation     %llu component(s), %llu turned outwards (%llu triangles)\n",
+                (unsigned long long)m.orientation.components,
+                (unsigned long long)m.orientation.flipped,
+                (unsigned long long)m.orientation.flipped_triangles);
     std::printf("bricks          %u (up to %llu triangles each)\n", m.brick_count,
                 (unsigned long long)m.brick_faces);
     std::printf("charts          %zu, texel size %g, %u..%u texels per side\n", nc, m.texel_size,

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <string>
 #include <tuple>
@@ -94,9 +95,11 @@ std::string TempPath(const std::string& name) {
 struct Result {
     Manifest manifest;
     double volume = 0;  // of all tiles' triangles, about the box centre
+    std::string tiles;  // all tiles' bytes
 };
 
-Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint64_t(1) << 30) {
+Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint64_t(1) << 30,
+                  int threads = 0) {
     const std::string ply = TempPath(name + ".ply"), dir = TempPath(name + ".mebake");
     {
         std::ofstream out(ply);
@@ -113,10 +116,13 @@ Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint
     o.out_dir = dir;
     o.memory = memory;
     o.force = true;
+    o.threads = threads;
     Result r;
     r.manifest = Ingest(o);
     const Vec3d centre = (r.manifest.bbox_min + r.manifest.bbox_max) * 0.5;
     for (uint32_t c = 0; c < r.manifest.charts.size(); ++c) {
+        std::ifstream bytes(TilePath(dir, c), std::ios::binary);
+        r.tiles.append(std::istreambuf_iterator<char>(bytes), {});
         const ChartTile t = ReadTile(TilePath(dir, c), TileParts::Mesh);
         for (const auto& tri : t.triangles) {
             Vec3d p[3];
@@ -178,6 +184,9 @@ TEST(Orient, InwardsSphereAcrossBricksIsTurnedAsOneComponent) {
     EXPECT_EQ(r.manifest.orientation.flipped, 1u);
     EXPECT_EQ(r.manifest.orientation.flipped_triangles, s.f.size());
     EXPECT_NEAR(r.volume, 4 * M_PI / 3, 0.01);
+    // The same tiles on one thread (the bricks are scanned two at a time otherwise).
+    const Result one = IngestMesh(s, "sphere_bricks_1", uint64_t(64) << 20, 1);
+    EXPECT_TRUE(one.tiles == r.tiles);
 }
 
 TEST(Orient, RoomAroundAnObjectIsKept) {
