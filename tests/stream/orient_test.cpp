@@ -2,6 +2,7 @@
 // ingest wound outwards (also when it spans several bricks), an outward one and an open
 // one are left as read, a nearly closed one is turned, and an enclosure around another
 // object (a room) is kept. Judged on the tiles: the signed volume of all their triangles.
+// Also the up axis ingest detects (stream/up_axis.h) on two synthetic shapes.
 #include "stream/ingest.h"
 #include "stream/tile.h"
 
@@ -199,6 +200,21 @@ TEST(Orient, RoomAroundAnObjectIsKept) {
     EXPECT_EQ(r.manifest.orientation.flipped, 0u);
     EXPECT_EQ(r.manifest.orientation.nested_kept, 1u);
     EXPECT_NEAR(r.volume, 8.0 - 512.0, 0.1);
+}
+
+}  // namespace
+}  // namespace mebake::stream
+
+namespace mebake::stream {
+namespace {
+
+// The up axis at ingest (up_axis.h): a sphere on a pedestal, z-up, stands on +z; a cube
+// stands equally on every side and keeps the default +y.
+TEST(UpAxis, StatueOnAPedestalStandsOnItsBase) {
+    Mesh statue = CubeGrid(6, [](Vec3d p) { return Vec3d(0.5 * p.x, 0.5 * p.y, 0.2 + 0.2 * p.z); });
+    statue.Append(CubeGrid(12, [](Vec3d p) { return OnSphere(p) + Vec3d(0, 0, 1.4); }));
+    EXPECT_EQ(IngestMesh(statue, "statue").manifest.up, Vec3d(0, 0, 1));
+    EXPECT_EQ(IngestMesh(CubeGrid(4, kCube), "cube_up").manifest.up, Vec3d(0, 1, 0));
 }
 
 }  // namespace
