@@ -152,6 +152,40 @@ bool Contains(const Piece& a, const Piece& b) {
            b.hi.y <= a.hi.y && b.hi.z <= a.hi.z;
 }
 
+// The rule of orient.h per component: 1 where it is turned outwards.
+std::vector<uint8_t> Decide(const std::vector<Piece>& comps, double surface_area,
+                            const Vec3d& origin, OrientReport* report) {
+    std::vector<uint8_t> flip(comps.size(), 0);
+    for (size_t c = 0; c < comps.size(); ++c) {
+        if (comps[c].area >= 0.01 * surface_area) {
+            const Shape s = Measure(comps[c]);
+            spdlog::debug("orientation: component of {} triangles ({:.1f} % of the area): "
+                          "openness {:.3f}, volume ratio {:+.3f}",
+                          comps[c].triangles, 100 * comps[c].area / surface_area, s.openness,
+                          s.volume_ratio);
+        }
+        if (!InsideOut(comps[c]))
+            continue;
+        bool nested = false;
+        for (size_t o = 0; o < comps.size() && !nested; ++o)
+            nested = o != c && comps[o].area >= kNestedArea * comps[c].area &&
+                     (Contains(comps[c], comps[o]) || Contains(comps[o], comps[c]));
+        if (nested) {
+            ++report->nested_kept;
+            continue;
+        }
+        spdlog::debug("orientation: turning outwards {} triangles in the box [{:.4g} {:.4g} "
+                      "{:.4g}] - [{:.4g} {:.4g} {:.4g}]",
+                      comps[c].triangles, comps[c].lo.x + origin.x, comps[c].lo.y + origin.y,
+                      comps[c].lo.z + origin.z, comps[c].hi.x + origin.x, comps[c].hi.y + origin.y,
+                      comps[c].hi.z + origin.z);
+        flip[c] = 1;
+        ++report->flipped_components;
+        report->flipped_triangles += comps[c].triangles;
+    }
+    return flip;
+}
+
 // Reverses the faces of the given labels in one brick.
 void FlipLabels(const std::string& dir, uint32_t brick, const std::vector<uint32_t>& labels) {
     std::vector<uint8_t> on_cut;
@@ -213,34 +247,7 @@ OrientReport OrientOutwards(const std::string& dir, const BrickPlan& plan, const
     }
     report.components += comps.size();
 
-    std::vector<uint8_t> flip(comps.size(), 0);
-    for (size_t c = 0; c < comps.size(); ++c) {
-        if (comps[c].area >= 0.01 * plan.surface_area) {
-            const Shape s = Measure(comps[c]);
-            spdlog::debug("orientation: component of {} triangles ({:.1f} % of the area): "
-                          "openness {:.3f}, volume ratio {:+.3f}",
-                          comps[c].triangles, 100 * comps[c].area / plan.surface_area, s.openness,
-                          s.volume_ratio);
-        }
-        if (!InsideOut(comps[c]))
-            continue;
-        bool nested = false;
-        for (size_t o = 0; o < comps.size() && !nested; ++o)
-            nested = o != c && comps[o].area >= kNestedArea * comps[c].area &&
-                     (Contains(comps[c], comps[o]) || Contains(comps[o], comps[c]));
-        if (nested) {
-            ++report.nested_kept;
-            continue;
-        }
-        spdlog::debug("orientation: turning outwards {} triangles in the box [{:.4g} {:.4g} "
-                      "{:.4g}] - [{:.4g} {:.4g} {:.4g}]",
-                      comps[c].triangles, comps[c].lo.x + origin.x, comps[c].lo.y + origin.y,
-                      comps[c].lo.z + origin.z, comps[c].hi.x + origin.x, comps[c].hi.y + origin.y,
-                      comps[c].hi.z + origin.z);
-        flip[c] = 1;
-        ++report.flipped_components;
-        report.flipped_triangles += comps[c].triangles;
-    }
+    const std::vector<uint8_t> flip = Decide(comps, plan.surface_area, origin, &report);
 
     // Labels to flip, per brick (pieces are in brick order, labels ascending in a brick).
     for (uint32_t i = 0; i < pieces.size();) {
