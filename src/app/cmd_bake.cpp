@@ -12,6 +12,7 @@
 #include "solve/solve_job.h"
 #include "stream/bake_dir.h"
 #include "stream/ingest_job.h"
+#include "stream/up_axis.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -30,6 +31,16 @@ uint64_t ParseMemory(const std::string& text) {
     return *bytes;
 }
 
+// --up: an axis name, or detected when not given.
+std::optional<Vec3d> UpOption(const std::string& name) {
+    if (name.empty())
+        return std::nullopt;
+    const auto axis = stream::ParseAxis(name);
+    if (!axis)
+        UsageError("--up {}: expected x, y, z, -x, -y or -z", name);
+    return axis;
+}
+
 stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     stream::IngestOptions opt;
     opt.inputs = c.inputs;
@@ -42,6 +53,8 @@ stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     opt.max_distortion = c.max_distortion;
     opt.force = c.force;
     opt.ground = c.ground;
+    opt.orient = !c.keep_winding;
+    opt.up = UpOption(c.up);
     return opt;
 }
 
@@ -91,6 +104,7 @@ int RunBake(const BakeCommand& c) {
     o.max_bounces = c.max_bounces;
     o.lightmap_resolution = c.lightmap_resolution;
     o.ground = c.ground;
+    o.up = UpOption(c.up);
     o.checkpoint_interval = c.checkpoint_interval;
     o.force = c.force;
     output::RunBakeJob(o);
@@ -129,6 +143,11 @@ int RunBakeInfo(const std::string& dir, bool json) {
         j["vertices"] = m.vertex_count;
         j["triangles"] = m.face_count;
         j["bricks"] = m.brick_count;
+        j["up"] = {m.up.x, m.up.y, m.up.z};
+        j["orientation"] = {{"components", m.orientation.components},
+                            {"flipped", m.orientation.flipped},
+                            {"flipped_triangles", m.orientation.flipped_triangles},
+                            {"nested_kept", m.orientation.nested_kept}};
         j["charts"] = nc;
         j["texel_size"] = m.texel_size;
         j["distortion_mean"] = area > 0 ? dist_mean / area : 0;
@@ -154,6 +173,11 @@ int RunBakeInfo(const std::string& dir, bool json) {
     std::printf("bounds          (%g, %g, %g) - (%g, %g, %g)\n", m.bbox_min.x, m.bbox_min.y,
                 m.bbox_min.z, m.bbox_max.x, m.bbox_max.y, m.bbox_max.z);
     std::printf("surface area    %g\n", m.surface_area);
+    std::printf("up              %s\n", stream::AxisName(m.up).c_str());
+    std::printf("orientation     %llu component(s), %llu turned outwards (%llu triangles)\n",
+                (unsigned long long)m.orientation.components,
+                (unsigned long long)m.orientation.flipped,
+                (unsigned long long)m.orientation.flipped_triangles);
     std::printf("bricks          %u (up to %llu triangles each)\n", m.brick_count,
                 (unsigned long long)m.brick_faces);
     std::printf("charts          %zu, texel size %g, %u..%u texels per side\n", nc, m.texel_size,

@@ -12,6 +12,7 @@
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "io/mesh_stats.h"
+#include "stream/bake_dir.h"
 
 namespace mebake::app {
 
@@ -102,7 +103,7 @@ void PrintStats(const io::MeshStats& s) {
 
 int RunInfo(const InfoOptions& opt) {
     if (opt.input != "-" && std::filesystem::is_directory(opt.input))
-        return RunBakeInfo(opt.input, opt.json);
+        return RunBakeInfo(stream::BakeDirectoryIn(opt.input), opt.json);
     auto in = io::InputStream::Open(opt.input);
     io::MeshFormat format = io::DetectFormat(*in, opt.input, opt.format);
     io::MeshStatsSink sink;

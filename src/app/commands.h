@@ -39,6 +39,8 @@ struct IngestCommand {
     double max_distortion = 0.05;
     bool force = false;
     bool ground = false;
+    bool keep_winding = false;  // no orientation pass (stream/orient.h)
+    std::string up;             // x, -x, y, ... ; empty: detected (stream/up_axis.h)
 };
 int RunIngest(const IngestCommand& opt);
 
@@ -71,6 +73,7 @@ struct BakeCommand {
     double tolerance = -1;
     int max_bounces = -1;
     bool ground = false;
+    std::string up;  // as IngestCommand::up
     uint32_t lightmap_resolution = 2048;
     double checkpoint_interval = 30;
     bool force = false;

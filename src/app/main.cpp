@@ -15,6 +15,7 @@
 #include "core/log.h"
 #include "core/progress.h"
 #include "io/mesh_format.h"
+#include "stream/bake_dir.h"
 
 namespace {
 
@@ -111,15 +112,23 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.001, 1.0));
     ing_cmd->add_flag("-f,--force", ing.force, "Replace an existing bake directory");
     ing_cmd->add_flag("--ground", ing.ground,
-                      "Add a ground plane under the scans (at the bounding box's floor, +Y up, "
-                      "3x the object's width, albedo 0.4)");
+                      "Add a ground plane under the scans (at the bounding box's floor along the up "
+                      "axis, see --up; 3x the object's width, albedo 0.4)");
+    ing_cmd->add_option("--up", ing.up,
+                        "The scans' up axis x, y, z, -x, -y or -z (default: detected: the direction whose lowest "
+                      "1 %% of vertices spans the largest support, if clearly; else +y); the default "
+                      "light, camera and --ground stand on it");
+    ing_cmd->add_flag("--keep-winding", ing.keep_winding,
+                      "Keep every component's winding as read. Default: a closed or nearly closed "
+                      "component wound inwards (negative enclosed volume) is turned outwards, "
+                      "unless its box contains or lies in another's (a room, a cavity)");
 
     // solve
     mebake::app::SolveCommand sol;
     auto* sol_cmd = app.add_subcommand(
         "solve", "Compute global illumination on an ingested bake directory (Master-Element\n"
                  "vector irradiance, Southwell shooting, adaptive wavelets).");
-    sol_cmd->add_option("dir", sol.dir, "Bake directory made by `mebake ingest`")->required();
+    sol_cmd->add_option("dir", sol.dir, "Bake directory made by `mebake ingest` (or `mebake bake`'s output directory)")->required();
     sol_cmd->add_option("--scene", sol.scene_file, "Scene file (JSON): materials, lights, sky, settings");
     sol_cmd->add_option("--order", sol.order, "Wavelet order: 0 constant ... 3 cubic (default 2)")
         ->check(CLI::Range(0, 3));
@@ -151,7 +160,7 @@ int main(int argc, char** argv) {
         "reference", "Independent path-traced radiosity B and vector irradiance E, with standard\n"
                      "errors, at random surface points of a bake directory (docs/accuracy.md);\n"
                      "a solved directory also gets its baked B at the same points and the error.");
-    ref_cmd->add_option("dir", ref.dir, "Ingested (or solved) bake directory")->required();
+    ref_cmd->add_option("dir", ref.dir, "Ingested (or solved) bake directory, or `mebake bake`'s output directory")->required();
     ref_cmd->add_option("--scene", ref.scene_file, "Scene file (default: the solve's, else the default rig)");
     ref_cmd->add_option("--points", ref.points, "Surface points (area-weighted)")->capture_default_str()
         ->check(CLI::Range(1, 10000000));
@@ -187,7 +196,7 @@ int main(int argc, char** argv) {
                    "and max error of B at the reference's points; or two pictures of the same\n"
                    "view (IMAGE REFERENCE, .png/.exr): RMS, p95, max and a difference picture\n"
                    "(docs/accuracy.md).");
-    cmp_cmd->add_option("dir", cmp.dir, "Solved bake directory, or a picture (.png/.exr)")->required();
+    cmp_cmd->add_option("dir", cmp.dir, "Solved bake directory (or `mebake bake`'s output directory), or a picture (.png/.exr)")->required();
     cmp_cmd->add_option("reference", cmp.reference, "JSON from `mebake reference`, or the reference picture")->required();
     cmp_cmd->add_option("--diff", cmp.diff, "Pictures: write the false-colour difference here (.png; red: brighter than the reference, blue: darker)");
     cmp_cmd->add_option("--diff-range", cmp.diff_range, "Pictures: display difference (sRGB 0..1) shown at full colour")->capture_default_str();
@@ -206,7 +215,7 @@ int main(int argc, char** argv) {
         "export", "Write what a solved bake directory holds: light-map atlas (EXR/PNG), vector\n"
                   "irradiance maps (EXR), the mesh with light-map uvs (glTF .glb, PLY, OBJ),\n"
                   "per-vertex baked colours (PLY) and statistics (JSON).");
-    exp_cmd->add_option("dir", exp.dir, "Solved bake directory")->required();
+    exp_cmd->add_option("dir", exp.dir, "Solved bake directory, or the output directory of `mebake bake`")->required();
     exp_cmd->add_option("--lightmap", exp.lightmap, "Light map: .exr (linear B, W/m^2) or .png (tone-mapped); pages of a multi-page atlas get UDIM numbers (name.1001.exr ...)");
     exp_cmd->add_option("--irradiance", exp.irradiance, "Vector irradiance maps E (.exr, channels E.x.R ... E.z.B)");
     exp_cmd->add_option("--mesh", exp.mesh, "Mesh with light-map uvs: .glb (light map embedded), .ply or .obj; '-' = PLY on stdout");
@@ -248,7 +257,7 @@ int main(int argc, char** argv) {
     mebake::app::RenderCommand ren;
     auto* ren_cmd = app.add_subcommand(
         "render", "Render a view of the baked lighting (pinhole camera, full-resolution mesh).");
-    ren_cmd->add_option("dir", ren.dir, "Solved bake directory")->required();
+    ren_cmd->add_option("dir", ren.dir, "Solved bake directory, or the output directory of `mebake bake`")->required();
     ren_cmd->add_option("-o,--output", ren.output, "Image: .exr (linear radiance) or .png (tone-mapped); '-' = EXR on stdout")->required();
     ren_cmd->add_option("--eye", ren.eye, "Camera position x,y,z (or x y z) (default: a three-quarter view from the key light's side, the object filling 85 % of the frame)")->expected(3)->delimiter(',');
     ren_cmd->add_option("--target", ren.target, "Point looked at x y z (default: the scene's centre)")->expected(3)->delimiter(',');
@@ -277,7 +286,9 @@ int main(int argc, char** argv) {
                 "'-o -' streams the\nvertex-coloured PLY to stdout.\n"
                 "Defaults without --scene: a uniform sky and a key area light from the right, 40 "
                 "degrees up\n(key : sky about 3 : 1); OUT/render.png looks from a three-quarter "
-                "view on the key's\nside with the object filling about 85 % of the frame.");
+                "view on the key's\nside with the object filling about 85 % of the frame. Up is --up, else "
+                "detected from the\nscan (the direction it stands on most broadly, else +y). "
+                "Faces of a closed scan wound\ninwards are turned outwards.");
     bk_cmd->add_option("inputs", bk.inputs, "Mesh files, or '-' for stdin")->required();
     bk_cmd->add_option("-o,--output", bk.output, "Output directory, or '-' for stdout")->required();
     bk_cmd->add_option("--format", bk_format, "Format of stdin")->check(kFormatName);
@@ -293,7 +304,12 @@ int main(int argc, char** argv) {
                        "Atlas side the texel size aims at")->capture_default_str();
     bk_cmd->add_flag("--ground", bk.ground,
                      "Add a ground plane under the scan that receives its shadow and bounces "
-                     "light (at the bounding box's floor, +Y up, 3x the object's width, albedo 0.4)");
+                     "light (at the bounding box's floor along the up axis, see --up; 3x the object's "
+                     "width, albedo 0.4)");
+    bk_cmd->add_option("--up", bk.up,
+                       "The scans' up axis x, y, z, -x, -y or -z (default: detected: the direction whose lowest "
+                       "1 %% of vertices spans the largest support, if clearly; else +y); the default "
+                       "light, camera and --ground stand on it");
     bk_cmd->add_flag("-f,--force", bk.force,
                      "Start over in an existing directory (without it, a bake resumes there)");
 
@@ -314,11 +330,13 @@ int main(int argc, char** argv) {
     cmp_cmd->footer("Example:\n  mebake compare scene.mebake ref.json\n"
                     "  mebake compare view.exr ref.exr --diff diff.png");
     exp_cmd->footer("Example:\n  mebake export scene.mebake --lightmap lm.exr --mesh lit.glb "
-                    "--vertex-colors lit.ply");
+                    "--vertex-colors lit.ply\n"
+                    "  mebake export out/ --mesh lit.obj    (out/ made by `mebake bake`)");
     vw_cmd->footer("Example:\n  mebake view out/rock    (then open http://127.0.0.1:8080/)\n"
                    "  http://127.0.0.1:8080/?eye=0,1,3.4&target=0,1,0&fov=40&mode=glossy");
     ren_cmd->footer("Example:\n  mebake render scene.mebake --eye 0,1,3 --target 0,0,0 -o view.png "
-                    "--glossy");
+                    "--glossy\n"
+                    "  mebake render out/ -o view.png --size 1280x960    (out/ made by `mebake bake`)");
     bk_cmd->footer("Example:\n  mebake bake scan.ply -o out/    (rerun the same command to resume)\n"
                    "  tools/mkscan --triangles 1000000 | mebake bake - -o out/");
 
@@ -340,12 +358,19 @@ int main(int argc, char** argv) {
             ing.format = ToFormat(ing_format);
             return mebake::app::RunIngest(ing);
         }
-        if (*sol_cmd) return mebake::app::RunSolve(sol);
+        // Every command that reads a bake directory also takes `mebake bake`'s output
+        // directory (its scene.mebake).
+        using mebake::stream::BakeDirectoryIn;
+        if (*sol_cmd) {
+            sol.dir = BakeDirectoryIn(sol.dir);
+            return mebake::app::RunSolve(sol);
+        }
         if (*bk_cmd) {
             bk.format = ToFormat(bk_format);
             return mebake::app::RunBake(bk);
         }
         if (*exp_cmd) {
+            exp.dir = BakeDirectoryIn(exp.dir);
             if (!exp_web.empty()) {
                 mebake::app::RunExportWeb(exp.dir, exp_web, exp.force, exp_web_plain, exp.threads);
                 if (exp.lightmap.empty() && exp.irradiance.empty() && exp.mesh.empty() &&
@@ -356,6 +381,7 @@ int main(int argc, char** argv) {
         }
         if (*vw_cmd) return mebake::app::RunView(vw);
         if (*ref_cmd) {
+            ref.dir = BakeDirectoryIn(ref.dir);
             if (ref_target.size() == 3)
                 ref.look_at = ref_target;
             else if (ref_target.size() == 1 && ref_target[0] >= 1e-6 && ref_target[0] <= 1)
@@ -364,8 +390,14 @@ int main(int argc, char** argv) {
                 mebake::UsageError("--target: one number (standard error, 1e-6..1) or three (x,y,z)");
             return mebake::app::RunReference(ref);
         }
-        if (*cmp_cmd) return mebake::app::RunCompare(cmp);
-        if (*ren_cmd) return mebake::app::RunRender(ren);
+        if (*cmp_cmd) {
+            cmp.dir = BakeDirectoryIn(cmp.dir);
+            return mebake::app::RunCompare(cmp);
+        }
+        if (*ren_cmd) {
+            ren.dir = BakeDirectoryIn(ren.dir);
+            return mebake::app::RunRender(ren);
+        }
         if (*conv_cmd) {
             conv.in_format = ToFormat(conv_in_format);
             conv.out_format = ToFormat(conv_out_format);

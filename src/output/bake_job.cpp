@@ -120,6 +120,7 @@ void RunBakeJob(const BakeJobOptions& c) {
     ing.threads = c.threads;
     ing.lightmap_resolution = c.lightmap_resolution;
     ing.ground = c.ground;
+    ing.up = c.up;
     ing.force = true;
     IngestOrReuse(ing, resuming, out_dir, to_stdout);
     Solve(c, ing.out_dir);

@@ -4,6 +4,7 @@
 // continues from its checkpoint, the outputs are written again.
 #pragma once
 
+#include "core/vec.h"
 #include "io/mesh_stream.h"
 
 #include <cstdint>
@@ -25,6 +26,7 @@ struct BakeJobOptions {
     int max_bounces = -1;
     uint32_t lightmap_resolution = 2048;
     bool ground = false;  // a ground plane under the inputs (stream/ground.h)
+    std::optional<Vec3d> up;  // the scans' up axis; none: detected (stream/up_axis.h)
     double checkpoint_interval = 30;
     bool force = false;
 };

@@ -166,6 +166,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
 
 Scene LoadScene(const stream::Manifest& manifest, const std::string& scene_file) {
     Scene scene;
+    scene.sky.up = manifest.up;  // the scene file's "up" overrides it
     for (const auto& in : manifest.inputs) {
         auto lib = LoadMtls(in);
         std::vector<Material> mats;

@@ -33,6 +33,11 @@ bool IsBakeDirectory(const std::string& path) {
     return std::filesystem::is_directory(path) && std::filesystem::exists(ManifestPath(path));
 }
 
+std::string BakeDirectoryIn(const std::string& path) {
+    const std::string inner = (std::filesystem::path(path) / "scene.mebake").string();
+    return !IsBakeDirectory(path) && IsBakeDirectory(inner) ? inner : path;
+}
+
 namespace {
 json Vec(const Vec3d& v) {
     return {v.x, v.y, v.z};
@@ -81,8 +86,13 @@ void WriteManifest(const std::string& dir, const Manifest& m) {
         j["ground"] = true;
         j["object_bbox"] = {Vec(m.object_bbox_min), Vec(m.object_bbox_max)};
     }
+    j["up"] = Vec(m.up);
     j["surface_area"] = m.surface_area;
     j["brick_count"] = m.brick_count;
+    j["orientation"] = {{"components", m.orientation.components},
+                        {"flipped", m.orientation.flipped},
+                        {"flipped_triangles", m.orientation.flipped_triangles},
+                        {"nested_kept", m.orientation.nested_kept}};
     j["charts"] = json::array();
     for (const auto& c : m.charts)
         j["charts"].push_back({{"brick", c.brick},
@@ -155,8 +165,17 @@ Manifest ReadManifest(const std::string& dir) {
         m.ground = j.value("ground", false);
         m.object_bbox_min = m.ground ? ToVec3d(j.at("object_bbox").at(0)) : m.bbox_min;
         m.object_bbox_max = m.ground ? ToVec3d(j.at("object_bbox").at(1)) : m.bbox_max;
+        if (j.contains("up"))
+            m.up = ToVec3d(j.at("up"));
         m.surface_area = j.at("surface_area");
         m.brick_count = j.at("brick_count");
+        if (j.contains("orientation")) {
+            const auto& o = j.at("orientation");
+            m.orientation.components = o.at("components");
+            m.orientation.flipped = o.at("flipped");
+            m.orientation.flipped_triangles = o.at("flipped_triangles");
+            m.orientation.nested_kept = o.at("nested_kept");
+        }
         for (const auto& c : j.at("charts")) {
             ChartRecord r;
             r.brick = c.at("brick");

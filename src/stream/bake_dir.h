@@ -72,8 +72,16 @@ struct Manifest {
     // the inputs' without it (the default camera and light frame the object).
     bool ground = false;
     Vec3d object_bbox_min{}, object_bbox_max{};
+    // The scans' up axis: --up, else detected (up_axis.h); the default rig, camera and
+    // ground stand on it. Directories from before it was recorded: +Y.
+    Vec3d up{0, 1, 0};
     double surface_area = 0;
     uint32_t brick_count = 0;
+    // Pass 2b (orient.h): components, those turned outwards and their triangles, and those
+    // inside out but nested in another (kept). All 0 when the pass was switched off.
+    struct Orientation {
+        uint64_t components = 0, flipped = 0, flipped_triangles = 0, nested_kept = 0;
+    } orientation;
     std::vector<ChartRecord> charts;
     uint64_t proxy_triangles = 0;
     // Largest distance of a proxy point from the input surface (0: the full mesh) and the
@@ -93,6 +101,9 @@ void WriteManifest(const std::string& dir, const Manifest& m);
 // Throws Error(Io) if missing, Error(Corrupt) naming the file if malformed.
 Manifest ReadManifest(const std::string& dir);
 bool IsBakeDirectory(const std::string& path);
+// The output directory of `mebake bake` holds its bake directory as scene.mebake: that one;
+// any other path as it is.
+std::string BakeDirectoryIn(const std::string& path);
 
 // Size and CRC-32 of a whole file ("-": all of stdin), read sequentially. Throws
 // Error(Io) naming it.

@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/vec.h"
 #include "stream/spill.h"
+#include "stream/trimesh.h"
 
 namespace mebake::stream {
 
@@ -56,5 +57,13 @@ std::string OwnersPath(const std::string& dir);
 
 // Reads back one brick's faces.
 std::vector<BrickFace> ReadBrick(const std::string& dir, uint32_t brick);
+// Replaces one brick's file with these faces (orient.h reverses some).
+void WriteBrick(const std::string& dir, uint32_t brick, const std::vector<BrickFace>& faces);
+
+// The brick's faces as a TriMesh with local indices (global ids ascending, triangles in
+// the brick file's order), its vertices' positions and colours from the spill, and per
+// vertex whether faces of another brick use it too (on_cut).
+TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
+                  std::vector<uint8_t>* on_cut);
 
 }  // namespace mebake::stream

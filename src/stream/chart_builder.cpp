@@ -22,50 +22,6 @@ namespace mebake::stream {
 
 namespace {
 
-// The brick's faces as a TriMesh with local indices (global ids ascending).
-TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
-                  std::vector<uint8_t>* on_cut) {
-    std::vector<BrickFace> faces = ReadBrick(dir, brick);
-    std::vector<uint64_t> ids;
-    ids.reserve(faces.size() * 3);
-    for (const auto& f : faces)
-        ids.insert(ids.end(), f.v, f.v + 3);
-    std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-
-    TriMesh m;
-    m.vertex_id = ids;
-    m.position.resize(ids.size());
-    on_cut->assign(ids.size(), 0);
-    DiskArray<Vec3f> positions(Spill::VerticesPath(dir), false, cache_bytes / 3);
-    DiskArray<SpillColor> colors(Spill::ColorsPath(dir), false, cache_bytes / 3);
-    DiskArray<uint32_t> owners(OwnersPath(dir), false, cache_bytes / 3);
-    bool any_color = false;
-    std::vector<SpillColor> col(ids.size());
-    for (size_t i = 0; i < ids.size(); ++i) {
-        m.position[i] = positions.Get(ids[i]);
-        col[i] = colors.Get(ids[i]);
-        any_color |= col[i].a != 0;
-        (*on_cut)[i] = owners.Get(ids[i]) == kOwnerShared;
-    }
-    if (any_color) {
-        m.albedo.resize(ids.size());
-        for (size_t i = 0; i < ids.size(); ++i)
-            m.albedo[i] = col[i].a ? Vec3f(col[i].r / 255.f, col[i].g / 255.f, col[i].b / 255.f)
-                                   : Vec3f(-1, -1, -1);
-    }
-    m.triangles.reserve(faces.size());
-    for (const auto& f : faces) {
-        std::array<uint32_t, 3> t;
-        for (int c = 0; c < 3; ++c)
-            t[size_t(c)] = uint32_t(std::lower_bound(ids.begin(), ids.end(), f.v[c]) - ids.begin());
-        m.triangles.push_back(t);
-        m.face_id.push_back(f.face_id);
-        m.material.push_back(f.material);
-    }
-    return m;
-}
-
 // The power of two nearest (in log scale) to the texels the chart's square needs.
 uint32_t ResolutionFor(double scale, const ChartBuildOptions& opt) {
     double want = scale / opt.texel_size;

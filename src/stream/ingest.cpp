@@ -12,8 +12,10 @@
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
 #include "stream/ground.h"
+#include "stream/orient.h"
 #include "stream/proxy_cluster.h"
 #include "stream/spill.h"
+#include "stream/up_axis.h"
 
 #include <algorithm>
 #include <atomic>
@@ -174,6 +176,26 @@ uint64_t InputBytes(const std::vector<std::string>& inputs) {
     return total;
 }
 
+// The scans' up direction (up_axis.h): --up, else detected from the vertices spilled so far.
+Vec3d ChooseUp(const IngestOptions& opt, Spill& spill, const std::string& dir) {
+    if (opt.up) {
+        spdlog::info("up: {} (--up)", AxisName(*opt.up));
+        return *opt.up;
+    }
+    const SpillResult& sr = spill.Finish();  // flushed, so the vertices can be read back
+    if (sr.vertex_count == 0)
+        return Vec3d(0, 1, 0);
+    const UpAxis up = DetectUpAxis(dir, sr.vertex_count, sr.bbox_min, sr.bbox_max,
+                                   size_t(4) << 20);
+    if (up.detected)
+        spdlog::info("up: {} detected (support {:.2f}, next {:.2f}; --up overrides)",
+                     AxisName(up.up), up.support, up.runner_up);
+    else
+        spdlog::info("up: +y, the default (no clear support: best {:.2f}; --up overrides)",
+                     up.support);
+    return up.up;
+}
+
 }  // namespace
 
 Manifest Ingest(const IngestOptions& opt) {
@@ -192,6 +214,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // Pass 1: spill.
     auto t0 = Clock::now();
     SpillResult sr;
+    double up_seconds = 0;
     {
         // Scoped: the spill's page caches are freed before the passes that follow.
         // Appends only: a few pages per file are enough to write in large blocks.
@@ -209,8 +232,12 @@ Manifest Ingest(const IngestOptions& opt) {
         progress.Finish();
         m.object_bbox_min = spill.result().bbox_min;
         m.object_bbox_max = spill.result().bbox_max;
+        const auto t_up = Clock::now();
+        m.up = ChooseUp(opt, spill, dir);
+        up_seconds = Since(t_up);
         if (opt.ground && spill.result().face_count > 0) {
-            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, spill.BeginInput(kGroundSource));
+            WriteGroundPlane(m.object_bbox_min, m.object_bbox_max, m.up,
+                             spill.BeginInput(kGroundSource));
             m.ground = true;
         }
         sr = spill.Finish();
@@ -233,6 +260,7 @@ Manifest Ingest(const IngestOptions& opt) {
     m.bbox_min = sr.bbox_min;
     m.bbox_max = sr.bbox_max;
     m.timings.emplace_back("spill", Since(t0));
+    m.timings.emplace_back("spill.up", up_seconds);  // of which the up axis (up_axis.h)
     if (sr.face_count == 0)
         InputError({opt.inputs[0]}, "the input has no faces to bake onto");
     spdlog::info("spilled {} vertices, {} triangles in {} (peak memory {})",
@@ -261,7 +289,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // The ground takes no light-map resolution from the scans: the texel size follows from
     // their area alone (the atlas grows by the ground's share).
     const double ground_area =
-        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max) : 0.0;
+        m.ground ? GroundPlaneArea(m.object_bbox_min, m.object_bbox_max, m.up) : 0.0;
     const double texel_area =
         std::max(plan.surface_area - ground_area, 1e-3 * plan.surface_area);
     m.texel_size = opt.texel_size > 0
@@ -272,6 +300,17 @@ Manifest Ingest(const IngestOptions& opt) {
     spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
                  plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
                  FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
+
+    // Pass 2b: components wound inwards turned outwards (orient.h).
+    if (opt.orient) {
+        auto t = Clock::now();
+        ProgressStage progress("orient", sr.face_count, "faces");
+        const OrientReport r = OrientOutwards(dir, plan, sr.bbox_min, sr.bbox_max, &progress);
+        progress.Finish();
+        m.orientation = {r.components, r.flipped_components, r.flipped_triangles,
+                         r.nested_kept};
+        m.timings.emplace_back("orient", Since(t));
+    }
 
     // Pass 3: charts, bricks in parallel (each writes only its own files).
     auto t2 = Clock::now();

@@ -2,6 +2,7 @@
 // chart tiles, in memory bounded by the budget:
 //   pass 1 spill     vertices and faces to flat files (spill.h)
 //   pass 2 bricks    faces binned by Morton order into bricks that fit the budget (bricks.h)
+//   pass 2b orient   components wound inwards turned outwards (orient.h)
 //   pass 3 charts    per brick in parallel: repair, charts, parameterization, tiles
 //                    (chart_builder.h)
 //   pass 4 proxy     the visibility mesh (proxy.bin): the full mesh, one chunk per brick,
@@ -29,6 +30,8 @@ struct IngestOptions {
     double max_distortion = 0.05;             // Jacobian deviation that splits a chart
     bool force = false;                       // replace an existing bake directory
     bool ground = false;                      // add a ground plane under the inputs (ground.h)
+    std::optional<Vec3d> up;                  // the scans' up axis; none: detected (up_axis.h)
+    bool orient = true;                       // turn inside-out components outwards (orient.h)
 };
 
 Manifest Ingest(const IngestOptions& opt);

@@ -3,6 +3,7 @@
 #include "core/checksum.h"
 #include "core/error.h"
 #include "io/mesh_format.h"
+#include "stream/up_axis.h"
 
 #include <algorithm>
 #include <atomic>
@@ -155,6 +156,9 @@ std::string CheckIngestReusable(const IngestOptions& c) {
         const std::string& name = key;  // clang 14 cannot capture a structured binding
         auto it = std::find_if(m.options.begin(), m.options.end(),
                                [&](const auto& kv) { return kv.first == name; });
+        // Directories from before the orientation pass and up detection: ingest again.
+        if (it == m.options.end() && (key == "orient" || key == "up"))
+            return "it was ingested before the " + key + " option existed";
         // Directories from before --ground existed have no ground.
         const std::string had =
             it != m.options.end() ? it->second : key == "ground" ? "0" : "(none)";
@@ -173,7 +177,9 @@ std::vector<std::pair<std::string, std::string>> IngestOptionsRecord(const Inges
             {"lightmap_resolution", std::to_string(opt.lightmap_resolution)},
             {"max_distortion", fmt::format("{:.17g}", opt.max_distortion)},
             {"memory", std::to_string(opt.memory)},
-            {"texel_size", fmt::format("{:.17g}", opt.texel_size)}};
+            {"texel_size", fmt::format("{:.17g}", opt.texel_size)},
+            {"orient", opt.orient ? "1" : "0"},
+            {"up", opt.up ? AxisName(*opt.up) : "auto"}};
 }
 
 Manifest RunIngestJob(const IngestOptions& opt) {

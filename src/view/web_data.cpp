@@ -245,13 +245,10 @@ json SkyJson(const solve::Sky& sky) {
 }  // namespace
 
 std::string ResolveBakeDirectory(const std::string& dir) {
-    if (stream::IsBakeDirectory(dir))
-        return dir;
-    const std::string inner = (fs::path(dir) / "scene.mebake").string();
-    if (stream::IsBakeDirectory(inner))
-        return inner;
-    if (!fs::exists(dir))
-        UsageError("{}: no such directory", dir);
+    if (const std::string found = stream::BakeDirectoryIn(dir); stream::IsBakeDirectory(found))
+        return found;
+    if (!fs::exists(dir))  // a missing input, as for the other commands (exit 1)
+        IoError({dir}, "no such directory");
     UsageError("{}: not a bake directory (no manifest.json, nor scene.mebake/manifest.json); "
                "make one with `mebake bake` or `mebake ingest`",
                dir);

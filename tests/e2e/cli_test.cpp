@@ -122,7 +122,7 @@ TEST(Cli, EveryHelpShowsAnExampleThatParses) {
     EXPECT_EQ(top.code, 0);
     EXPECT_NE(top.out.find("Examples:\n  mebake bake"), std::string::npos) << top.out;
     for (const char* cmd : {"info", "convert", "ingest", "solve", "reference", "compare", "export",
-                            "render", "bake"}) {
+                            "render", "view", "bake"}) {
         const auto r = Capture(kBin + " " + cmd + " --help");
         EXPECT_EQ(r.code, 0) << cmd;
         const size_t at = r.out.find("Example:\n  mebake " + std::string(cmd) + " ");
@@ -157,6 +157,16 @@ TEST(Cli, BakeSampleEndToEnd) {
         Capture(kBin + " info --json " + (tmp / "vertex_colors.ply").string()).out);
     EXPECT_EQ(j["vertices"].get<uint64_t>(), 2601u);
     EXPECT_TRUE(j["properties"]["colors"].get<bool>());
+    // The commands that read a bake directory also take bake's output directory.
+    EXPECT_EQ(Capture(kBin + " -q render " + tmp.string() + " --size 64x48 -o " +
+                      (tmp / "small.png").string())
+                  .code,
+              0);
+    EXPECT_TRUE(fs::exists(tmp / "small.png"));
+    const auto stats = Capture(kBin + " -q export " + tmp.string() + " --stats -");
+    EXPECT_EQ(stats.code, 0);
+    EXPECT_NO_THROW(nlohmann::json::parse(stats.out)) << stats.out;
+    EXPECT_EQ(Capture(kBin + " info " + tmp.string() + " > /dev/null").code, 0);
     fs::remove_all(tmp);
 }
 

@@ -73,7 +73,7 @@ TEST(ProgressJson, EveryStageOfABakeReportsAndFinishes) {
     }
     EXPECT_GT(objects, 10);
     for (const char* stage :
-         {"spill", "bricks", "charts", "proxy", "direct", "solve", "export", "render"}) {
+         {"spill", "bricks", "orient", "charts", "proxy", "direct", "solve", "export", "render"}) {
         EXPECT_TRUE(finished.count(stage)) << stage << " has no final progress object";
         EXPECT_TRUE(with_eta.count(stage)) << stage << " never had an ETA";
     }

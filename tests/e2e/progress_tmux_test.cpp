@@ -29,7 +29,10 @@ std::string Quote(const std::string& s) {
 TEST(ProgressTmux, LinesWithPercentAndEtaDuringIngestDirectAndBatches) {
     if (Shell("tmux -V > /dev/null 2>&1") != 0)
         GTEST_SKIP() << "tmux is not installed (scripts/install-deps.sh installs it)";
-    const fs::path tmp = fs::temp_directory_path() / "mebake_progress_tmux";
+    // Per process: two checkouts' test runs on one machine must not share the directory
+    // (one removed the other's tiles mid-bake).
+    const fs::path tmp =
+        fs::temp_directory_path() / ("mebake_progress_tmux_" + std::to_string(::getpid()));
     fs::remove_all(tmp);
     fs::create_directories(tmp);
     const std::string scan = (tmp / "scan.ply").string();
@@ -52,7 +55,7 @@ TEST(ProgressTmux, LinesWithPercentAndEtaDuringIngestDirectAndBatches) {
 
     // A live line: "  <stage> [detail] 12.3% (...) elapsed 4.1s, ETA 20s".
     const std::regex live(
-        R"(^\s+(spill|bricks|charts|proxy|direct|solve|export|render)\b.*\d+\.\d%.*ETA \d)");
+        R"(^\s+(spill|bricks|orient|charts|proxy|direct|solve|export|render)\b.*\d+\.\d%.*ETA \d)");
     std::set<std::string> seen;
     std::string screen;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(20);

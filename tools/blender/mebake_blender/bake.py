@@ -90,7 +90,9 @@ class BakeJob:
         bake = [binary, "bake", scan, "-o", out_dir, "--force", "--progress", "json",
                 "--order", str(settings.order), "--max-bounces", str(settings.max_bounces),
                 "--lightmap-resolution", str(settings.lightmap_resolution),
-                "--threads", str(settings.threads)]
+                "--threads", str(settings.threads),
+                # Blender's world is z-up: the default light, camera and ground stand on it.
+                "--up", "z"]
         if settings.ground:
             bake.append("--ground")
         export = [binary, "-q", "export", self.scene_dir, "--mesh", self.mesh, "--force"]
