@@ -128,6 +128,7 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
         for (uint32_t c = 0; c < fields.size(); ++c) {
             if (kill_here && !hook.rotate && c == fields.size() / 2)
                 ::raise(SIGKILL);
+            const RegionPin pin = fields[c].Pin();
             w.AddArray(Tag("NODE"), c, PackNodes(fields[c].nodes()));
             w.AddArray(Tag("VALU"), c, fields[c].values());
             w.AddArray(Tag("UNSH"), c, fields[c].unshots());

@@ -1,9 +1,11 @@
 #include "solve/solver.h"
 
 #include "core/check.h"
+#include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "solve/direct.h"
+#include "solve/field_pool.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
@@ -126,6 +128,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     const SolveChart& sc = charts_[chart];
     const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
+    const RegionPin field_pin = field.Pin();
     const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
     e->chart = chart;
     e->scale = sc.scale;
@@ -229,6 +232,7 @@ public:
           sc_(solver.charts_[receiver]),
           pin_(sc_.geometry.Pin()),
           field_(solver.fields_[receiver]),
+          field_pin_(field_.Pin()),
           order_(field_.order()),
           ng_(order_ + 1),
           finest_(sc_.geometry.finest_level()),
@@ -405,6 +409,7 @@ private:
     const SolveChart& sc_;
     const GeometryPin pin_;
     ChartField& field_;
+    const RegionPin field_pin_;
     const int order_, ng_, finest_;
     const float eps_;
     double receiver_tau_ = 0, negligible_ = 0;
@@ -444,6 +449,11 @@ void Solver::Restore(std::vector<ChartField> fields, double reference, int next_
     CHECK_EQ(fields.size(), charts_.size());
     CHECK(next_batch >= 0);
     fields_ = std::move(fields);
+    if (pool_) {
+        for (uint32_t c = 0; c < fields_.size(); ++c)
+            StoreField(c);
+        pool_->Map(&fields_);
+    }
     reference_ = reference;
     next_batch_ = next_batch;
     stats_ = stats;
@@ -518,8 +528,10 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
                 stats_.opened_links += opened[k];
             }
         }
-        for (size_t k = g0; k < g1; ++k)
+        for (size_t k = g0; k < g1; ++k) {
+            const RegionPin pin = fields_[shooters[k]].Pin();
             fields_[shooters[k]].ClearUnshot();
+        }
         ParallelFor(0, nc, [&](int64_t r) {
             Gather(uint32_t(r), emitters, links);
             if (progress_ && *progress_)
@@ -532,6 +544,7 @@ size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool
 // Nodes per level, leaves and field memory, for the statistics.
 void Solver::CountNodes() {
     for (const auto& f : fields_) {
+        const RegionPin pin = f.Pin();
         for (const auto& n : f.nodes()) {
             if (stats_.nodes_per_level.size() <= n.level)
                 stats_.nodes_per_level.resize(n.level + 1u);
@@ -539,6 +552,24 @@ void Solver::CountNodes() {
             stats_.leaves += n.leaf() ? 1 : 0;
         }
         stats_.field_bytes += f.MemoryBytes();
+    }
+    if (pool_)
+        stats_.field_bytes += pool_->file_bytes();
+}
+
+// A refined field moves to the pool. Without room on disk it stays in memory (the same
+// values, so the same solution), with one warning.
+void Solver::StoreField(uint32_t chart) {
+    if (!pool_)
+        return;
+    try {
+        pool_->Store(chart, &fields_[chart]);
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Io)
+            throw;
+        static std::atomic<bool> warned{false};
+        if (!warned.exchange(true))
+            spdlog::warn("{}; coefficient pools stay in memory", e.what());
     }
 }
 
@@ -560,9 +591,12 @@ void Solver::Run(const Progress& progress) {
         ParallelFor(0, nc, [&](int64_t c) {
             if (!stop_ || !stop_->load())
                 RefineDirect(uint32_t(c));
+            StoreField(uint32_t(c));
             if (progress)
                 progress({-1, ++refined, nc, 1, 0});
         });
+        if (pool_)
+            pool_->Map(&fields_);
         stats_.seconds_direct = Since(t0);
         if (stop_ && stop_->load()) {
             stats_.stop_reason = "interrupted";

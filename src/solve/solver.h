@@ -29,6 +29,7 @@
 
 namespace mebake::solve {
 
+class FieldPool;
 class VisibilityScene;
 struct SegmentBatch;
 
@@ -112,9 +113,13 @@ public:
     void SetStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
     void Restore(std::vector<ChartField> fields, double reference, int next_batch,
                  const SolveStats& stats);
+    // Keeps the fields in `pool` (field_pool.h) once refined (or restored): set before
+    // Run() and Restore(). Without one they stay in memory; the results are the same.
+    void SetFieldPool(FieldPool* pool) { pool_ = pool; }
     double reference() const { return reference_; }
     int next_batch() const { return next_batch_; }  // -1 before the direct pass is done
 
+    // Hold a field's Pin() while reading it (pooled fields are mapped).
     const std::vector<ChartField>& fields() const { return fields_; }
     std::vector<ChartField>& mutable_fields() { return fields_; }
     const SolveStats& stats() const { return stats_; }
@@ -158,6 +163,7 @@ private:
     double ReferenceIrradiance() const;
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
     void CountNodes();
+    void StoreField(uint32_t chart);  // into pool_, when there is one
     void RefineDirect(uint32_t chart);
     struct SimplifiedFit;  // refine_direct.cpp (--multi-emitter simplify)
     void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level,
@@ -184,6 +190,7 @@ private:
     const VisibilityScene& vis_;
     SolveOptions opt_;
     std::vector<ChartField> fields_;
+    FieldPool* pool_ = nullptr;
     std::vector<uint8_t> emissive_;  // chart has emissive texels (shot in the first batch)
     ClusterTree clusters_;           // built when Run() starts, from the charts alone
     std::vector<ClusterSample> cluster_samples_;  // per chart: its level-1 texels
