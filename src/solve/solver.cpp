@@ -489,58 +489,6 @@ double Solver::ReferenceIrradiance() const {
     return ref;
 }
 
-// One Southwell batch: shooters are the charts with power within batch_fraction of the
-// largest, in chart order (the first batch shoots every chart, so emission, added only to
-// first shots, goes out once). Returns the number of shooters.
-size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first) {
-    const uint32_t nc = uint32_t(charts_.size());
-    std::vector<uint32_t> shooters;
-    for (uint32_t c = 0; c < nc; ++c)
-        if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
-            shooters.push_back(c);
-    // Emitters are built and gathered a group of shooters at a time: all at once they took
-    // ~80 KB per chart (49 MB at 598 charts), memory that grew with the chart count rather
-    // than the lighting. Light that one group delivers may be shot by a later group of the
-    // same batch (Southwell shooting allows any order); the groups depend on the chart
-    // order only, not on the thread count.
-    const size_t group = std::max<size_t>(1, opt_.emitter_group);
-    const uint64_t gathers = nc * ((shooters.size() + group - 1) / group);
-    std::atomic<uint64_t> gathered{0};
-    const double unshot =
-        stats_.emitted_power > 0 ? stats_.unshot_power / stats_.emitted_power : 0;
-    for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
-        const size_t g1 = std::min(shooters.size(), g0 + group);
-        std::vector<Emitter> emitters(g1 - g0);
-        ParallelFor(0, int64_t(g1 - g0), [&](int64_t k) {
-            BuildEmitter(shooters[g0 + size_t(k)], first, &emitters[size_t(k)]);
-        });
-        // Cluster links per shooter (each its own output), then every receiver gathers.
-        std::vector<std::vector<float>> links;
-        if (opt_.cluster_links) {
-            links.resize(emitters.size());
-            std::vector<uint64_t> accepted(emitters.size()), opened(emitters.size());
-            ParallelFor(0, int64_t(emitters.size()), [&](int64_t k) {
-                LinkClusters(emitters[size_t(k)], &links[size_t(k)], &accepted[size_t(k)],
-                             &opened[size_t(k)]);
-            });
-            for (size_t k = 0; k < emitters.size(); ++k) {
-                stats_.cluster_links += accepted[k];
-                stats_.opened_links += opened[k];
-            }
-        }
-        for (size_t k = g0; k < g1; ++k) {
-            const RegionPin pin = fields_[shooters[k]].Pin();
-            fields_[shooters[k]].ClearUnshot();
-        }
-        ParallelFor(0, nc, [&](int64_t r) {
-            Gather(uint32_t(r), emitters, links);
-            if (progress_ && *progress_)
-                (*progress_)({next_batch_, ++gathered, gathers, unshot, 0});
-        });
-    }
-    return shooters.size();
-}
-
 // Nodes per level, leaves and field memory, for the statistics.
 void Solver::CountNodes() {
     for (const auto& f : fields_) {
