@@ -463,11 +463,14 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     Solver solver(scene, charts, vis, so);
     solver.SetFieldPool(pool.get());
     if (opt.resume && !opt.force) {
+        // Fields go to the solver (and its pool) one at a time.
         auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
-                                 charts.size());
+                                 charts.size(), [&](uint32_t c, ChartField&& f) {
+                                     solver.RestoreField(c, std::move(f));
+                                 });
         if (cp) {
             spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
-            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+            solver.Restore(cp->reference, cp->next_batch, cp->stats);
         }
     }
     StopSignals signals;

@@ -447,13 +447,21 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
 void Solver::Restore(std::vector<ChartField> fields, double reference, int next_batch,
                      const SolveStats& stats) {
     CHECK_EQ(fields.size(), charts_.size());
+    for (uint32_t c = 0; c < fields.size(); ++c)
+        RestoreField(c, std::move(fields[c]));
+    Restore(reference, next_batch, stats);
+}
+
+void Solver::RestoreField(uint32_t chart, ChartField field) {
+    CHECK_LT(chart, fields_.size());
+    fields_[chart] = std::move(field);
+    StoreField(chart);
+}
+
+void Solver::Restore(double reference, int next_batch, const SolveStats& stats) {
     CHECK(next_batch >= 0);
-    fields_ = std::move(fields);
-    if (pool_) {
-        for (uint32_t c = 0; c < fields_.size(); ++c)
-            StoreField(c);
+    if (pool_)
         pool_->Map(&fields_);
-    }
     reference_ = reference;
     next_batch_ = next_batch;
     stats_ = stats;

@@ -113,6 +113,10 @@ public:
     void SetStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
     void Restore(std::vector<ChartField> fields, double reference, int next_batch,
                  const SolveStats& stats);
+    // The same a chart at a time (one field in memory at once with a pool): every chart's
+    // RestoreField(), then Restore() of the rest.
+    void RestoreField(uint32_t chart, ChartField field);
+    void Restore(double reference, int next_batch, const SolveStats& stats);
     // Keeps the fields in `pool` (field_pool.h) once refined (or restored): set before
     // Run() and Restore(). Without one they stay in memory; the results are the same.
     void SetFieldPool(FieldPool* pool) { pool_ = pool; }

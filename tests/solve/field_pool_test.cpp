@@ -1,7 +1,7 @@
 // FieldPool (the coefficient pools in a mapped file): a solve whose fields live in the pool,
 // evicted at every unpin, gives the same bits as one with the fields in memory, on any
-// thread count; a checkpoint written from pooled fields resumes into a pool with the same
-// bits; evicted fields really leave resident memory; a field subdivided after pooling
+// thread count; a checkpoint written from pooled fields resumes into a pool, a field at a
+// time, with the same bits; evicted fields really leave resident memory; a field subdivided after pooling
 // moves back into memory with its values.
 #include "solve/field_pool.h"
 
@@ -14,21 +14,15 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <filesystem>
-#include <unistd.h>
 
 namespace mebake::solve {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string FreshDir(const std::string& name) {
-    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p / "solve");
-    return p.string();
-}
+using testing::FieldBits;
+using testing::FreshDir;
+using testing::SameBits;
 
 SolveOptions Options() {
     SolveOptions opt;
@@ -38,25 +32,11 @@ SolveOptions Options() {
     return opt;
 }
 
-std::vector<float> Values(const Solver& s) {
-    std::vector<float> all;
-    for (const auto& f : s.fields()) {
-        const RegionPin pin = f.Pin();
-        all.insert(all.end(), f.values().begin(), f.values().end());
-        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
-    }
-    return all;
-}
-
-bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
-
 TEST(MappedFieldPool, SolveInThePoolGivesTheSameBits) {
     const testing::LitBox box(3, 32);
     Solver ram(box.scene, box.charts, box.vis, Options());
     ram.Run();
-    const std::vector<float> want = Values(ram);
+    const std::vector<float> want = FieldBits(ram);
     ASSERT_GE(ram.stats().batches, 2);
 
     for (int threads : {1, 2}) {
@@ -68,7 +48,7 @@ TEST(MappedFieldPool, SolveInThePoolGivesTheSameBits) {
         mapped.Run();
         for (const auto& f : mapped.fields())
             EXPECT_TRUE(f.mapped());
-        EXPECT_TRUE(SameBits(Values(mapped), want)) << threads << " threads";
+        EXPECT_TRUE(SameBits(FieldBits(mapped), want)) << threads << " threads";
         EXPECT_EQ(mapped.stats().rays, ram.stats().rays);
         EXPECT_GT(pool.stats().evictions, 3u);
         EXPECT_EQ(pool.stats().resident_bytes, 0u) << "nothing pinned, budget 0";
@@ -81,7 +61,7 @@ TEST(MappedFieldPool, CheckpointResumesIntoThePoolWithTheSameBits) {
     const testing::LitBox box(3, 32);
     Solver ram(box.scene, box.charts, box.vis, Options());
     ram.Run();
-    const std::vector<float> want = Values(ram);
+    const std::vector<float> want = FieldBits(ram);
     constexpr uint64_t kKey = 42;
     for (int stop_at : {0, 1}) {
         const std::string dir = FreshDir("fieldpool-ckpt");
@@ -98,14 +78,24 @@ TEST(MappedFieldPool, CheckpointResumesIntoThePoolWithTheSameBits) {
             first.Run();
             ASSERT_EQ(first.stats().stop_reason, "interrupted");
         }
-        auto cp = LoadCheckpoint(dir, kKey, 1, 9, box.charts.size());
-        ASSERT_TRUE(cp.has_value());
+        // As `mebake solve --resume` does it: fields go to the pool one at a time.
         FieldPool pool(dir + "/solve", box.charts.size(), 0);
         Solver second(box.scene, box.charts, box.vis, Options());
         second.SetFieldPool(&pool);
-        second.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        size_t sunk = 0;
+        auto cp = LoadCheckpoint(dir, kKey, 1, 9, box.charts.size(),
+                                 [&](uint32_t c, ChartField&& f) {
+                                     EXPECT_EQ(c, sunk++);
+                                     second.RestoreField(c, std::move(f));
+                                 });
+        ASSERT_TRUE(cp.has_value());
+        EXPECT_TRUE(cp->fields.empty());
+        EXPECT_EQ(sunk, box.charts.size()) << "the chosen checkpoint only";
+        second.Restore(cp->reference, cp->next_batch, cp->stats);
+        for (const auto& f : second.fields())
+            EXPECT_TRUE(f.mapped());
         second.Run();
-        EXPECT_TRUE(SameBits(Values(second), want)) << "stopped before batch " << stop_at;
+        EXPECT_TRUE(SameBits(FieldBits(second), want)) << "stopped before batch " << stop_at;
         EXPECT_EQ(second.stats().batches, ram.stats().batches);
         fs::remove_all(dir);
     }

@@ -8,7 +8,11 @@
 #include "solve/solver.h"
 #include "solve/visibility.h"
 
+#include <cstring>
+#include <filesystem>
 #include <functional>
+#include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace mebake::solve::testing {
@@ -98,5 +102,30 @@ struct LitBox {
         vis.Commit();
     }
 };
+
+// A fresh, empty directory under the temporary directory, for this process; with
+// `solve`, a bake directory's solve/ inside (where checkpoints and pools go).
+inline std::string FreshDir(const std::string& name, bool solve = true) {
+    namespace fs = std::filesystem;
+    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(solve ? p / "solve" : p);
+    return p.string();
+}
+
+// Every field's value and unshot coefficients, chart after chart (each pinned to be read).
+inline std::vector<float> FieldBits(const Solver& s) {
+    std::vector<float> all;
+    for (const auto& f : s.fields()) {
+        const RegionPin pin = f.Pin();
+        all.insert(all.end(), f.values().begin(), f.values().end());
+        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
+    }
+    return all;
+}
+
+inline bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
 
 }  // namespace mebake::solve::testing
