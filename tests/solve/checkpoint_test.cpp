@@ -63,12 +63,7 @@ TEST(Checkpoint, ResumedSolveIsBitIdentical) {
     for (int stop_at : {0, 1, 2}) {
         const std::string dir = FreshDir("checkpoint");
         Solver first(box.scene, box.charts, box.vis, Options());
-        first.SetBatchHook([&](int next) {
-            if (next < stop_at)
-                return true;
-            WriteCheckpoint(dir, first, kKey);
-            return false;
-        });
+        testing::StopWithCheckpointAt(first, dir, kKey, stop_at);
         first.Run();
         EXPECT_EQ(first.stats().stop_reason, "interrupted");
         ASSERT_TRUE(fs::exists(CheckpointPath(dir)));

@@ -69,12 +69,7 @@ TEST(MappedFieldPool, CheckpointResumesIntoThePoolWithTheSameBits) {
             FieldPool pool(dir + "/solve", box.charts.size(), 0);
             Solver first(box.scene, box.charts, box.vis, Options());
             first.SetFieldPool(&pool);
-            first.SetBatchHook([&](int next) {
-                if (next < stop_at)
-                    return true;
-                WriteCheckpoint(dir, first, kKey);
-                return false;
-            });
+            testing::StopWithCheckpointAt(first, dir, kKey, stop_at);
             first.Run();
             ASSERT_EQ(first.stats().stop_reason, "interrupted");
         }

@@ -3,6 +3,7 @@
 // and as the triangles of its (res+1)^2 corner grid for visibility.
 #pragma once
 
+#include "solve/checkpoint.h"
 #include "solve/polygon_light.h"
 #include "solve/scene.h"
 #include "solve/solver.h"
@@ -122,6 +123,16 @@ inline std::vector<float> FieldBits(const Solver& s) {
         all.insert(all.end(), f.unshots().begin(), f.unshots().end());
     }
     return all;
+}
+
+// Makes `s` write a checkpoint into `dir` and stop at the boundary before batch `stop_at`.
+inline void StopWithCheckpointAt(Solver& s, const std::string& dir, uint64_t key, int stop_at) {
+    s.SetBatchHook([&s, dir, key, stop_at](int next) {
+        if (next < stop_at)
+            return true;
+        WriteCheckpoint(dir, s, key);
+        return false;
+    });
 }
 
 inline bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
