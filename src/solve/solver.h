@@ -11,8 +11,9 @@
 //     point pair, then pushes the gathered coefficients to its leaves.
 //  3. Stops when the unshot power falls below a fraction of the first shot's power, or
 //     at the bounce or time limit.
-// Receivers are processed in parallel, each writing only its own field, in a fixed
-// order: the result is bit-identical for any thread count.
+// Each batch is a task graph (shoot_graph.cpp): receivers gather in parallel, each writing
+// only its own field, in a fixed order: the result is bit-identical for any thread count.
+// Refined fields live in a memory-mapped pool (field_pool.h) when one is set.
 #pragma once
 
 #include <atomic>
