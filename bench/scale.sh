@@ -127,7 +127,8 @@ cat "$WORK/scale.md"
 
 if command -v gnuplot > /dev/null; then
   for s in ingest solve export; do
-    awk -F'\t' -v s="$s" 'NR > 1 && $2 == s && $5 == "ok" {print $1, $3, $4 / 1024}' "$TSV" | sort -n > "$WORK/$s.dat"
+    # triangles, wall s, peak MiB, CPU s (rows of older runs have no CPU column: wall)
+    awk -F'\t' -v s="$s" 'NR > 1 && $2 == s && $5 == "ok" {print $1, $3, $4 / 1024, ($6 == "" ? $3 : $6)}' "$TSV" | sort -n > "$WORK/$s.dat"
   done
   gnuplot <<GP
 set terminal pngcairo size 1100,480 noenhanced
@@ -139,8 +140,8 @@ set xlabel "triangles"
 set key top left
 set title "peak RSS (MiB)"
 plot "$WORK/ingest.dat" u 1:3 w lp t "ingest", "$WORK/solve.dat" u 1:3 w lp t "solve", "$WORK/export.dat" u 1:3 w lp t "export"
-set title "wall time (s)"
-plot "$WORK/ingest.dat" u 1:2 w lp t "ingest", "$WORK/solve.dat" u 1:2 w lp t "solve", "$WORK/export.dat" u 1:2 w lp t "export", x/1e5 w l dt 2 t "linear"
+set title "CPU time, user + sys (s)"
+plot "$WORK/ingest.dat" u 1:4 w lp t "ingest", "$WORK/solve.dat" u 1:4 w lp t "solve", "$WORK/export.dat" u 1:4 w lp t "export", x/1e5 w l dt 2 t "linear"
 unset multiplot
 GP
   echo "wrote bench/scale.png" >&2
