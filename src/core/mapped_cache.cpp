@@ -35,8 +35,12 @@ RegionPin::~RegionPin() {
         cache_->Unpin(region_);
 }
 
-MappedCache::MappedCache(const std::string& dir, const std::string& what, uint64_t budget_bytes)
-    : path_(dir + "/(" + what + ")"), fd_(OpenTemporaryFile(dir, what)), budget_(budget_bytes) {}
+MappedCache::MappedCache(const std::string& dir, const std::string& what, uint64_t budget_bytes,
+                         bool writable)
+    : path_(dir + "/(" + what + ")"),
+      fd_(OpenTemporaryFile(dir, what)),
+      budget_(budget_bytes),
+      writable_(writable) {}
 
 MappedCache::~MappedCache() {
     if (data_)
@@ -46,6 +50,7 @@ MappedCache::~MappedCache() {
 }
 
 uint32_t MappedCache::Add(std::span<const std::span<const std::byte>> pieces) {
+    std::lock_guard lock(mutex_);
     CHECK(data_ == nullptr);  // no Add() after Data()
     Region r;
     r.offset = (size_ + kAlign - 1) / kAlign * kAlign;
@@ -71,16 +76,26 @@ uint32_t MappedCache::Add(std::span<const std::span<const std::byte>> pieces) {
     return uint32_t(regions_.size() - 1);
 }
 
-const std::byte* MappedCache::Data(uint32_t r) {
+std::byte* MappedCache::Map(uint32_t r) {
     CHECK_LT(r, regions_.size());
     std::lock_guard lock(mutex_);
     if (data_ == nullptr && size_ > 0) {
-        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_SHARED, fd_, 0);
+        const int prot = writable_ ? PROT_READ | PROT_WRITE : PROT_READ;
+        void* p = ::mmap(nullptr, size_, prot, MAP_SHARED, fd_, 0);
         if (p == MAP_FAILED)
             IoError({path_}, "cannot map {} bytes: {}", size_, ErrnoString(errno));
         data_ = static_cast<std::byte*>(p);
     }
     return data_ + regions_[r].offset;
+}
+
+const std::byte* MappedCache::Data(uint32_t r) {
+    return Map(r);
+}
+
+std::byte* MappedCache::MutableData(uint32_t r) {
+    CHECK(writable_);
+    return Map(r);
 }
 
 void MappedCache::DropPages(const Region& r) {

@@ -1,9 +1,14 @@
 // Regions of one unlinked file, memory-mapped, with RAII pins and a residency budget: the
-// cache for data that is read a region at a time (the solve's geometry pyramids, one per
-// chart). Its sibling for data looked up element by element is core/paged_file.h.
+// cache for data that is worked on a region at a time (the solve's geometry pyramids and
+// coefficient pools, one region per chart). Its sibling for data looked up element by
+// element is core/paged_file.h.
 //
-// Regions are appended once (each starts on a page boundary), then the file is mapped
-// read-only: its pages are clean page-cache pages, so dropping them costs no write. A pass
+// Regions are appended once (each starts on a page boundary), then the file is mapped:
+// read-only by default, so its pages are clean page-cache pages and dropping them costs
+// no write; or writable (the coefficient pools), where a dropped dirty page stays in the
+// page cache and the kernel writes it back to the file. Appending writes every byte of a
+// region, so the file's blocks exist before the mapping and a store through it never has
+// to allocate disk (a full disk is an Error from Add(), never a SIGBUS later). A pass
 // over a region holds a RegionPin. When a pin is released and the pinned or recently used
 // regions exceed the budget, the least recently used unpinned ones are dropped from this
 // process (madvise MADV_DONTNEED; the bytes stay in the file and the kernel's page cache).
@@ -44,19 +49,23 @@ class MappedCache {
 public:
     // An unlinked file in directory `dir` (nothing is left behind, even after a crash);
     // `what` names it in messages. budget_bytes: resident regions kept beyond the pinned
-    // ones. Throws Error(Io).
-    MappedCache(const std::string& dir, const std::string& what, uint64_t budget_bytes);
+    // ones. writable: the mapping may be written through MutableData(). Throws Error(Io).
+    MappedCache(const std::string& dir, const std::string& what, uint64_t budget_bytes,
+                bool writable = false);
     ~MappedCache();
     MappedCache(const MappedCache&) = delete;
     MappedCache& operator=(const MappedCache&) = delete;
 
     // Appends a region made of `pieces`, in order (regions are numbered in the order
-    // added). Not thread-safe; every Add() comes before the first Data(). Throws Error(Io)
-    // (a full disk): callers can keep their data in memory instead.
+    // added; calls from several threads are serialized). Every Add() comes before the
+    // first Data(). Throws Error(Io) (a full disk): callers can keep their data in memory
+    // instead.
     uint32_t Add(std::span<const std::span<const std::byte>> pieces);
     // The bytes of region r (the first call maps the file); valid while the cache lives.
     // Read them while holding a pin.
     const std::byte* Data(uint32_t r);
+    // The same bytes, writable (a writable cache only); write them while holding a pin.
+    std::byte* MutableData(uint32_t r);
     RegionPin Pin(uint32_t r);
 
     size_t region_count() const { return regions_.size(); }
@@ -73,11 +82,13 @@ public:
     Stats stats() const;
     // Whether region r is counted as resident (pinned or not yet evicted). For tests.
     bool resident(uint32_t r) const;
+    bool writable() const { return writable_; }
 
 private:
     friend class RegionPin;
     void Unpin(uint32_t r);
     void TrimLocked();
+    std::byte* Map(uint32_t r);  // maps the file on the first call
 
     struct Region {
         uint64_t offset = 0, bytes = 0;
@@ -89,9 +100,10 @@ private:
 
     std::string path_;  // for messages; the file itself is unlinked
     int fd_ = -1;
-    std::byte* data_ = nullptr;  // the read-only mapping, once Data() made it
-    uint64_t size_ = 0;
     uint64_t budget_ = 0;
+    bool writable_ = false;
+    std::byte* data_ = nullptr;  // the mapping, once Data() made it
+    uint64_t size_ = 0;
     std::vector<Region> regions_;
     mutable std::mutex mutex_;
     uint64_t clock_ = 0;

@@ -28,6 +28,10 @@ uint64_t MemoryBudget::GeometryPyramids() const {
     return total_ / 32;
 }
 
+uint64_t MemoryBudget::CoefficientPools() const {
+    return total_ / 16;
+}
+
 uint64_t MemoryBudget::EmbreeLimit() const {
     return 2 * Visibility();
 }
@@ -38,7 +42,8 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"ingest.bricks", Bricks(), "all (two bricks in flight, 2000 B per triangle)"},
             {"solve.visibility", Visibility(), "1/16 (Embree scene, sized at ingest)"},
             {"solve.embree_limit", EmbreeLimit(), "2x visibility (hard cap)"},
-            {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"}};
+            {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"},
+            {"solve.coefficient_pools", CoefficientPools(), "1/16 beyond pinned charts"}};
 }
 
 }  // namespace mebake

@@ -36,6 +36,9 @@ public:
     uint64_t Visibility() const;
     // Solve: the geometry pyramids resident beyond the charts pinned by the threads.
     uint64_t GeometryPyramids() const;
+    // Solve: the coefficient pools (quadtree nodes, value and unshot per chart) resident
+    // beyond the fields pinned by the threads and the emitters being built.
+    uint64_t CoefficientPools() const;
     // Solve: a hard cap on Embree's own allocations (its memory monitor). Twice the
     // visibility share: the share sizes the scene, the cap catches a scene far off it
     // (built for a larger budget) with a clear error instead of swapping.

@@ -37,10 +37,14 @@ public:
     // Adds a chunk; `index` distinguishes repeated tags (e.g. one per chart).
     void Add(uint32_t tag, uint32_t index, std::span<const uint8_t> bytes, bool compress = true);
     template <typename T>
-    void AddArray(uint32_t tag, uint32_t index, const std::vector<T>& v, bool compress = true) {
+    void AddArray(uint32_t tag, uint32_t index, std::span<const T> v, bool compress = true) {
         static_assert(std::is_trivially_copyable_v<T>);
         Add(tag, index, {reinterpret_cast<const uint8_t*>(v.data()), v.size() * sizeof(T)},
             compress);
+    }
+    template <typename T>
+    void AddArray(uint32_t tag, uint32_t index, const std::vector<T>& v, bool compress = true) {
+        AddArray(tag, index, std::span<const T>(v), compress);
     }
     // Writes the table and header, fsyncs, renames into place. `durable` also fsyncs
     // the directory (checkpoints need it; bulk tiles can batch it).

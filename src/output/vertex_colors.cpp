@@ -7,6 +7,7 @@
 #include "stream/spill.h"
 #include "stream/trimesh.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -45,13 +46,19 @@ struct TileColors {
 VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path,
                                    const VertexColorOptions& opt) {
     const uint64_t nv = view.manifest.vertex_count;
+    // A page cache larger than its array buys nothing (its pages are allocated up front):
+    // at 64 MiB each, the two arrays made every export ~190 MiB, the smallest scan's too.
+    const auto cache = [&](size_t element) {
+        return size_t(std::min<uint64_t>(std::max<uint64_t>(nv * element, uint64_t(1) << 20),
+                                         opt.cache_bytes));
+    };
     const std::string vpath = stream::Spill::VerticesPath(view.dir);
-    DiskArray<Vec3f> positions(vpath, false, opt.cache_bytes);
+    DiskArray<Vec3f> positions(vpath, false, cache(sizeof(Vec3f)));
     if (positions.size() != nv)
         CorruptError({vpath}, "{} vertices but the manifest says {}", positions.size(), nv);
 
     // Pass 1: accumulate B per global vertex; spill the real faces.
-    auto accum = TempArray<Accum>(opt.temp_dir, opt.cache_bytes);
+    auto accum = TempArray<Accum>(opt.temp_dir, cache(sizeof(Accum)));
     {
         std::vector<Accum> zeros(kBatch);
         for (uint64_t v = 0; v < nv; v += kBatch)

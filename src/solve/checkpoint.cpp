@@ -128,6 +128,7 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
         for (uint32_t c = 0; c < fields.size(); ++c) {
             if (kill_here && !hook.rotate && c == fields.size() / 2)
                 ::raise(SIGKILL);
+            const RegionPin pin = fields[c].Pin();
             w.AddArray(Tag("NODE"), c, PackNodes(fields[c].nodes()));
             w.AddArray(Tag("VALU"), c, fields[c].values());
             w.AddArray(Tag("UNSH"), c, fields[c].unshots());
@@ -146,7 +147,7 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
 }
 
 Checkpoint ReadCheckpoint(const std::string& path, uint64_t key, int order, int blocks,
-                          size_t charts) {
+                          size_t charts, const FieldSink& sink) {
     io::ChunkReader r(path, kKind, kCheckpointVersion, kCheckpointVersion);
     const auto h = ReadPod<Header>(r, Tag("HEAD"));
     if (h.key != key)
@@ -171,7 +172,8 @@ Checkpoint ReadCheckpoint(const std::string& path, uint64_t key, int order, int 
     cp.stats.seconds_indirect = k.seconds_indirect;
     cp.stats.emitted_power = k.emitted_power;
     cp.stats.unshot_power = k.unshot_power;
-    cp.fields.reserve(charts);
+    if (!sink)
+        cp.fields.reserve(charts);
     for (uint32_t c = 0; c < charts; ++c) {
         auto nodes = UnpackNodes(r.ReadArray<PackedNode>(Tag("NODE"), c), path, c);
         auto value = r.ReadArray<float>(Tag("VALU"), c);
@@ -186,13 +188,18 @@ Checkpoint ReadCheckpoint(const std::string& path, uint64_t key, int order, int 
                 if (!std::isfinite(x))
                     CorruptError({path}, "chart {}: non-finite coefficient", c);
         f.Assign(std::move(nodes), std::move(value), std::move(unshot));
-        cp.fields.push_back(std::move(f));
+        if (sink)
+            sink(c, std::move(f));
+        else
+            cp.fields.push_back(std::move(f));
     }
     return cp;
 }
 
 std::optional<Checkpoint> LoadCheckpoint(const std::string& dir, uint64_t key, int order,
-                                         int blocks, size_t charts) {
+                                         int blocks, size_t charts, const FieldSink& sink) {
+    // With a sink, candidates are only validated (their fields dropped as read).
+    const FieldSink validate = [](uint32_t, ChartField&&) {};
     const std::string solve_dir = dir + "/solve";
     if (fs::is_directory(solve_dir)) {
         for (const auto& e : fs::directory_iterator(solve_dir)) {
@@ -208,7 +215,8 @@ std::optional<Checkpoint> LoadCheckpoint(const std::string& dir, uint64_t key, i
         if (!fs::exists(path))
             continue;
         try {
-            Checkpoint cp = ReadCheckpoint(path, key, order, blocks, charts);
+            Checkpoint cp =
+                ReadCheckpoint(path, key, order, blocks, charts, sink ? validate : FieldSink());
             if (!best || cp.next_batch > best->next_batch)
                 best = std::move(cp);
         } catch (const Error& e) {
@@ -222,6 +230,8 @@ std::optional<Checkpoint> LoadCheckpoint(const std::string& dir, uint64_t key, i
         spdlog::warn("falling back to {} (batch {})", best->path, best->next_batch);
     if (!best && damaged)
         spdlog::warn("no usable checkpoint is left: the solve starts over");
+    if (best && sink)
+        best = ReadCheckpoint(best->path, key, order, blocks, charts, sink);
     return best;
 }
 

@@ -17,6 +17,7 @@
 #include "solve/solver.h"
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -53,15 +54,19 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
 // Reads and validates one checkpoint file against the solve's key and shape. Throws
 // Error(Usage) when it was made from other tiles or settings (never silently mixed),
 // Error(Corrupt) / Error(Io) naming the file when it is damaged.
+// With a `sink`, every chart's field goes to it as it is read (cp.fields stays empty), so
+// no more than one field is held here.
+using FieldSink = std::function<void(uint32_t chart, ChartField&& field)>;
 Checkpoint ReadCheckpoint(const std::string& path, uint64_t key, int order, int blocks,
-                          size_t charts);
+                          size_t charts, const FieldSink& sink = {});
 
 // The newest valid checkpoint of `dir` (next, newest, previous: the highest batch wins).
 // Damaged or truncated files are reported with a warning naming them and skipped;
 // nullopt when none is usable. A key mismatch throws Error(Usage) (see ReadCheckpoint).
-// Leftover temporaries of an interrupted write are removed.
+// Leftover temporaries of an interrupted write are removed. With a `sink`, the candidates
+// are validated one field at a time, then the chosen one is read again into the sink.
 std::optional<Checkpoint> LoadCheckpoint(const std::string& dir, uint64_t key, int order,
-                                         int blocks, size_t charts);
+                                         int blocks, size_t charts, const FieldSink& sink = {});
 
 bool HasCheckpoint(const std::string& dir);
 void RemoveCheckpoints(const std::string& dir);

@@ -10,14 +10,20 @@
 //   pending  lighting gathered at this node during a batch, not yet pushed to leaves:
 //            allocated by the first pending() call and freed by PushPending(), so only
 //            the charts being gathered hold it.
-// Storage is pooled in flat arrays indexed by node, so memory follows the node count; Pull()
-// (the end of refinement and of every gather) trims the arrays' spare capacity.
+// Storage is flat arrays indexed by node, so memory follows the node count. They are
+// either the field's own vectors (growing while the direct pass refines; Pull() trims their
+// spare capacity) or, once refinement is done, a region of the solve's mapped coefficient
+// pool (field_pool.h): then value and unshot are read and written in place through the
+// mapping, and Pin() keeps the region resident. Subdividing a mapped field first copies it
+// back into its own vectors (the pool's regions do not grow); values never change.
 #pragma once
 
+#include "core/mapped_cache.h"
 #include "solve/basis.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace mebake::solve {
@@ -38,11 +44,16 @@ class ChartField {
 public:
     ChartField() = default;
     ChartField(int order, int blocks);
+    // A copy is always held in memory; a move keeps the storage.
+    ChartField(const ChartField& o);
+    ChartField& operator=(const ChartField& o);
+    ChartField(ChartField&& o) noexcept;
+    ChartField& operator=(ChartField&& o) noexcept;
 
     int order() const { return order_; }
     int blocks() const { return blocks_; }
     int stride() const { return stride_; }  // floats per node per set
-    size_t node_count() const { return nodes_.size(); }
+    size_t node_count() const { return count_; }
     const QuadNode& node(size_t n) const { return nodes_[n]; }
 
     float* value(size_t n) { return &value_[n * size_t(stride_)]; }
@@ -51,7 +62,10 @@ public:
     const float* value(size_t n) const { return &value_[n * size_t(stride_)]; }
     const float* unshot(size_t n) const { return &unshot_[n * size_t(stride_)]; }
 
-    bool has_unshot() const { return !unshot_.empty(); }
+    bool has_unshot() const { return has_unshot_; }
+    // Keeps a mapped field's region resident while alive (holds nothing in memory).
+    RegionPin Pin() const { return cache_ ? cache_->Pin(region_) : RegionPin(); }
+    bool mapped() const { return cache_ != nullptr; }
 
     // Makes four children of a leaf; their value and unshot are the parent's restricted
     // (Push), pending zero. Returns the first child's index.
@@ -70,20 +84,40 @@ public:
     void Pull();
     void ClearUnshot();
 
-    // Serialization support (checkpoints, solution files).
-    const std::vector<QuadNode>& nodes() const { return nodes_; }
-    const std::vector<float>& values() const { return value_; }
-    const std::vector<float>& unshots() const { return unshot_; }
-    // An empty `unshot` makes a values-only field (has_unshot() false).
+    // Serialization support (checkpoints, solution files, the coefficient pool).
+    std::span<const QuadNode> nodes() const { return {nodes_, count_}; }
+    std::span<const float> values() const { return {value_, count_ * size_t(stride_)}; }
+    std::span<const float> unshots() const {
+        return {unshot_, has_unshot_ ? count_ * size_t(stride_) : 0};
+    }
+    // An empty `unshot` makes a values-only field (has_unshot() false). In memory.
     void Assign(std::vector<QuadNode> nodes, std::vector<float> value, std::vector<float> unshot);
+    // For the coefficient pool (field_pool.h): Release() frees the arrays once the pool
+    // holds a copy (the field is unusable until UseRegion()); UseRegion() makes region
+    // `region` of `cache` (writable, mapped) the arrays: nodes(), values() and unshots()
+    // at these byte offsets.
+    void Release();
+    void UseRegion(MappedCache* cache, uint32_t region, size_t value_offset,
+                   size_t unshot_offset);
+    // Bytes in memory (a mapped field's arrays count as the pool's, not here).
     size_t MemoryBytes() const;
 
 private:
     void PushDown(size_t n, const float* add);  // adds `add` (node n's basis) to n's subtree leaves
+    void InMemory();      // copies a mapped field into its own vectors
+    void PointAtOwn();    // the array pointers at the own vectors
 
     int order_ = 0, blocks_ = 0, stride_ = 0;
-    std::vector<QuadNode> nodes_;
-    std::vector<float> value_, unshot_, pending_;
+    size_t count_ = 0;
+    bool has_unshot_ = false;
+    // The arrays: the own vectors below, or a region of cache_.
+    QuadNode* nodes_ = nullptr;
+    float* value_ = nullptr;
+    float* unshot_ = nullptr;
+    MappedCache* cache_ = nullptr;
+    uint32_t region_ = 0;
+    std::vector<QuadNode> own_nodes_;
+    std::vector<float> own_value_, own_unshot_, pending_;
 };
 
 }  // namespace mebake::solve

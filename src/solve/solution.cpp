@@ -21,7 +21,7 @@ std::string SolutionPath(const std::string& dir) {
     return dir + "/solve/solution.bin";
 }
 
-std::vector<PackedNode> PackNodes(const std::vector<QuadNode>& nodes) {
+std::vector<PackedNode> PackNodes(std::span<const QuadNode> nodes) {
     std::vector<PackedNode> out;
     out.reserve(nodes.size());
     for (const auto& n : nodes)
@@ -66,6 +66,7 @@ void WriteSolution(const std::string& path, const std::vector<ChartField>& field
     if (key != 0)
         w.Add(Tag("SKEY"), 0, {reinterpret_cast<const uint8_t*>(&key), sizeof(key)}, false);
     for (uint32_t c = 0; c < fields.size(); ++c) {
+        const RegionPin pin = fields[c].Pin();
         w.AddArray(Tag("NODE"), c, PackNodes(fields[c].nodes()));
         w.AddArray(Tag("COEF"), c, fields[c].values());
     }

@@ -5,6 +5,7 @@
 #include "io/chunk_file.h"
 #include "solve/field.h"
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,7 @@ struct PackedNode {
     int32_t first_child;
     uint32_t level, i, j;
 };
-std::vector<PackedNode> PackNodes(const std::vector<QuadNode>& nodes);
+std::vector<PackedNode> PackNodes(std::span<const QuadNode> nodes);
 // Checks the tree structure; throws Error(Corrupt) naming `path` and the chart.
 std::vector<QuadNode> UnpackNodes(const std::vector<PackedNode>& packed, const std::string& path,
                                   uint32_t chart);

@@ -11,6 +11,7 @@
 #include "io/byte_stream.h"
 #include "io/chunk_file.h"
 #include "solve/checkpoint.h"
+#include "solve/field_pool.h"
 #include "solve/geometry_cache.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
@@ -217,6 +218,20 @@ std::unique_ptr<GeometryCache> LoadCharts(const std::string& dir, const MemoryBu
     return geometry;
 }
 
+// The coefficient pools in a memory-mapped file under the budget's share (field_pool.h);
+// null (the fields stay in memory, the same values) when the file cannot be made.
+std::unique_ptr<FieldPool> MakeFieldPool(const std::string& dir, const MemoryBudget& budget,
+                                         size_t charts) {
+    try {
+        return std::make_unique<FieldPool>(dir + "/solve", charts, budget.CoefficientPools());
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Io)
+            throw;
+        spdlog::warn("{}; the coefficient pools stay in memory", e.what());
+        return nullptr;
+    }
+}
+
 // Small emissive surfaces become exact polygon lights of the scene; returns true when they
 // are too large for that and must shoot their emission through the solver.
 bool AddEmissiveLights(const std::string& dir, const stream::Manifest& m, Scene* scene) {
@@ -353,7 +368,7 @@ void KeepSceneFile(const SolveJobOptions& opt) {
 
 nlohmann::json StatsJson(const SolveJobOptions& opt, const SolveOptions& so, size_t charts,
                          const SolveStats& st, double total, const GeometryCache* geometry,
-                         const CheckpointSchedule& checkpoints) {
+                         const FieldPool* pool, const CheckpointSchedule& checkpoints) {
     nlohmann::json j;
     j["order"] = so.settings.order;
     j["unknown"] = so.settings.radiosity ? "radiosity" : "irradiance";
@@ -384,6 +399,13 @@ nlohmann::json StatsJson(const SolveJobOptions& opt, const SolveOptions& so, siz
                          {"budget_bytes", geometry->budget_bytes()},
                          {"peak_resident_bytes", gs.peak_resident_bytes},
                          {"evictions", gs.evictions}};
+    }
+    if (pool) {
+        const FieldPool::Stats ps = pool->stats();
+        j["coefficient_pools"] = {{"file_bytes", pool->file_bytes()},
+                                  {"budget_bytes", pool->budget_bytes()},
+                                  {"peak_resident_bytes", ps.peak_resident_bytes},
+                                  {"evictions", ps.evictions}};
     }
     j["peak_rss_bytes"] = PeakRssBytes();
     j["emitted_power"] = st.emitted_power;
@@ -437,13 +459,18 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     spdlog::info("solving {} charts, order M{}, {}, tolerance {}", charts.size(), so.settings.order,
                  so.settings.radiosity ? "radiosity" : "vector irradiance", so.settings.tolerance);
 
+    const std::unique_ptr<FieldPool> pool = MakeFieldPool(opt.dir, budget, charts.size());
     Solver solver(scene, charts, vis, so);
+    solver.SetFieldPool(pool.get());
     if (opt.resume && !opt.force) {
+        // Fields go to the solver (and its pool) one at a time.
         auto cp = LoadCheckpoint(opt.dir, key, so.settings.order, so.settings.radiosity ? 3 : 9,
-                                 charts.size());
+                                 charts.size(), [&](uint32_t c, ChartField&& f) {
+                                     solver.RestoreField(c, std::move(f));
+                                 });
         if (cp) {
             spdlog::info("resuming from {} at batch {}", cp->path, cp->next_batch);
-            solver.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+            solver.Restore(cp->reference, cp->next_batch, cp->stats);
         }
     }
     StopSignals signals;
@@ -461,7 +488,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     // The scene file and the statistics go first: solution.bin is the commit point.
     KeepSceneFile(opt);
     const std::string text =
-        StatsJson(opt, so, charts.size(), st, total, geometry.get(), checkpoints).dump(2) + "\n";
+        StatsJson(opt, so, charts.size(), st, total, geometry.get(), pool.get(), checkpoints).dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
         if (path.empty())
             continue;

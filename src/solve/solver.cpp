@@ -1,9 +1,11 @@
 #include "solve/solver.h"
 
 #include "core/check.h"
+#include "core/error.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "solve/direct.h"
+#include "solve/field_pool.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
@@ -126,6 +128,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     const SolveChart& sc = charts_[chart];
     const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
+    const RegionPin field_pin = field.Pin();
     const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
     e->chart = chart;
     e->scale = sc.scale;
@@ -229,6 +232,7 @@ public:
           sc_(solver.charts_[receiver]),
           pin_(sc_.geometry.Pin()),
           field_(solver.fields_[receiver]),
+          field_pin_(field_.Pin()),
           order_(field_.order()),
           ng_(order_ + 1),
           finest_(sc_.geometry.finest_level()),
@@ -405,6 +409,7 @@ private:
     const SolveChart& sc_;
     const GeometryPin pin_;
     ChartField& field_;
+    const RegionPin field_pin_;
     const int order_, ng_, finest_;
     const float eps_;
     double receiver_tau_ = 0, negligible_ = 0;
@@ -442,8 +447,21 @@ void Solver::Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
 void Solver::Restore(std::vector<ChartField> fields, double reference, int next_batch,
                      const SolveStats& stats) {
     CHECK_EQ(fields.size(), charts_.size());
+    for (uint32_t c = 0; c < fields.size(); ++c)
+        RestoreField(c, std::move(fields[c]));
+    Restore(reference, next_batch, stats);
+}
+
+void Solver::RestoreField(uint32_t chart, ChartField field) {
+    CHECK_LT(chart, fields_.size());
+    fields_[chart] = std::move(field);
+    StoreField(chart);
+}
+
+void Solver::Restore(double reference, int next_batch, const SolveStats& stats) {
     CHECK(next_batch >= 0);
-    fields_ = std::move(fields);
+    if (pool_)
+        pool_->Map(&fields_);
     reference_ = reference;
     next_batch_ = next_batch;
     stats_ = stats;
@@ -479,59 +497,10 @@ double Solver::ReferenceIrradiance() const {
     return ref;
 }
 
-// One Southwell batch: shooters are the charts with power within batch_fraction of the
-// largest, in chart order (the first batch shoots every chart, so emission, added only to
-// first shots, goes out once). Returns the number of shooters.
-size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first) {
-    const uint32_t nc = uint32_t(charts_.size());
-    std::vector<uint32_t> shooters;
-    for (uint32_t c = 0; c < nc; ++c)
-        if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
-            shooters.push_back(c);
-    // Emitters are built and gathered a group of shooters at a time: all at once they took
-    // ~80 KB per chart (49 MB at 598 charts), memory that grew with the chart count rather
-    // than the lighting. Light that one group delivers may be shot by a later group of the
-    // same batch (Southwell shooting allows any order); the groups depend on the chart
-    // order only, not on the thread count.
-    const size_t group = std::max<size_t>(1, opt_.emitter_group);
-    const uint64_t gathers = nc * ((shooters.size() + group - 1) / group);
-    std::atomic<uint64_t> gathered{0};
-    const double unshot =
-        stats_.emitted_power > 0 ? stats_.unshot_power / stats_.emitted_power : 0;
-    for (size_t g0 = 0; g0 < shooters.size(); g0 += group) {
-        const size_t g1 = std::min(shooters.size(), g0 + group);
-        std::vector<Emitter> emitters(g1 - g0);
-        ParallelFor(0, int64_t(g1 - g0), [&](int64_t k) {
-            BuildEmitter(shooters[g0 + size_t(k)], first, &emitters[size_t(k)]);
-        });
-        // Cluster links per shooter (each its own output), then every receiver gathers.
-        std::vector<std::vector<float>> links;
-        if (opt_.cluster_links) {
-            links.resize(emitters.size());
-            std::vector<uint64_t> accepted(emitters.size()), opened(emitters.size());
-            ParallelFor(0, int64_t(emitters.size()), [&](int64_t k) {
-                LinkClusters(emitters[size_t(k)], &links[size_t(k)], &accepted[size_t(k)],
-                             &opened[size_t(k)]);
-            });
-            for (size_t k = 0; k < emitters.size(); ++k) {
-                stats_.cluster_links += accepted[k];
-                stats_.opened_links += opened[k];
-            }
-        }
-        for (size_t k = g0; k < g1; ++k)
-            fields_[shooters[k]].ClearUnshot();
-        ParallelFor(0, nc, [&](int64_t r) {
-            Gather(uint32_t(r), emitters, links);
-            if (progress_ && *progress_)
-                (*progress_)({next_batch_, ++gathered, gathers, unshot, 0});
-        });
-    }
-    return shooters.size();
-}
-
 // Nodes per level, leaves and field memory, for the statistics.
 void Solver::CountNodes() {
     for (const auto& f : fields_) {
+        const RegionPin pin = f.Pin();
         for (const auto& n : f.nodes()) {
             if (stats_.nodes_per_level.size() <= n.level)
                 stats_.nodes_per_level.resize(n.level + 1u);
@@ -539,6 +508,24 @@ void Solver::CountNodes() {
             stats_.leaves += n.leaf() ? 1 : 0;
         }
         stats_.field_bytes += f.MemoryBytes();
+    }
+    if (pool_)
+        stats_.field_bytes += pool_->file_bytes();
+}
+
+// A refined field moves to the pool. Without room on disk it stays in memory (the same
+// values, so the same solution), with one warning.
+void Solver::StoreField(uint32_t chart) {
+    if (!pool_)
+        return;
+    try {
+        pool_->Store(chart, &fields_[chart]);
+    } catch (const Error& e) {
+        if (e.kind() != ErrorKind::Io)
+            throw;
+        static std::atomic<bool> warned{false};
+        if (!warned.exchange(true))
+            spdlog::warn("{}; coefficient pools stay in memory", e.what());
     }
 }
 
@@ -560,9 +547,12 @@ void Solver::Run(const Progress& progress) {
         ParallelFor(0, nc, [&](int64_t c) {
             if (!stop_ || !stop_->load())
                 RefineDirect(uint32_t(c));
+            StoreField(uint32_t(c));
             if (progress)
                 progress({-1, ++refined, nc, 1, 0});
         });
+        if (pool_)
+            pool_->Map(&fields_);
         stats_.seconds_direct = Since(t0);
         if (stop_ && stop_->load()) {
             stats_.stop_reason = "interrupted";

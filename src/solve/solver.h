@@ -11,8 +11,9 @@
 //     point pair, then pushes the gathered coefficients to its leaves.
 //  3. Stops when the unshot power falls below a fraction of the first shot's power, or
 //     at the bounce or time limit.
-// Receivers are processed in parallel, each writing only its own field, in a fixed
-// order: the result is bit-identical for any thread count.
+// Each batch is a task graph (shoot_graph.cpp): receivers gather in parallel, each writing
+// only its own field, in a fixed order: the result is bit-identical for any thread count.
+// Refined fields live in a memory-mapped pool (field_pool.h) when one is set.
 #pragma once
 
 #include <atomic>
@@ -29,6 +30,7 @@
 
 namespace mebake::solve {
 
+class FieldPool;
 class VisibilityScene;
 struct SegmentBatch;
 
@@ -112,9 +114,17 @@ public:
     void SetStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
     void Restore(std::vector<ChartField> fields, double reference, int next_batch,
                  const SolveStats& stats);
+    // The same a chart at a time (one field in memory at once with a pool): every chart's
+    // RestoreField(), then Restore() of the rest.
+    void RestoreField(uint32_t chart, ChartField field);
+    void Restore(double reference, int next_batch, const SolveStats& stats);
+    // Keeps the fields in `pool` (field_pool.h) once refined (or restored): set before
+    // Run() and Restore(). Without one they stay in memory; the results are the same.
+    void SetFieldPool(FieldPool* pool) { pool_ = pool; }
     double reference() const { return reference_; }
     int next_batch() const { return next_batch_; }  // -1 before the direct pass is done
 
+    // Hold a field's Pin() while reading it (pooled fields are mapped).
     const std::vector<ChartField>& fields() const { return fields_; }
     std::vector<ChartField>& mutable_fields() { return fields_; }
     const SolveStats& stats() const { return stats_; }
@@ -158,6 +168,7 @@ private:
     double ReferenceIrradiance() const;
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
     void CountNodes();
+    void StoreField(uint32_t chart);  // into pool_, when there is one
     void RefineDirect(uint32_t chart);
     struct SimplifiedFit;  // refine_direct.cpp (--multi-emitter simplify)
     void FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_level, int max_level,
@@ -184,6 +195,7 @@ private:
     const VisibilityScene& vis_;
     SolveOptions opt_;
     std::vector<ChartField> fields_;
+    FieldPool* pool_ = nullptr;
     std::vector<uint8_t> emissive_;  // chart has emissive texels (shot in the first batch)
     ClusterTree clusters_;           // built when Run() starts, from the charts alone
     std::vector<ClusterSample> cluster_samples_;  // per chart: its level-1 texels

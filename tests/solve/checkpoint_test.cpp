@@ -36,25 +36,9 @@ SolveOptions Options() {
     return opt;
 }
 
-std::vector<float> Values(const Solver& s) {
-    std::vector<float> all;
-    for (const auto& f : s.fields()) {
-        all.insert(all.end(), f.values().begin(), f.values().end());
-        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
-    }
-    return all;
-}
-
-bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
-
-std::string FreshDir(const std::string& name) {
-    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p / "solve");
-    return p.string();
-}
+using testing::FieldBits;
+using testing::FreshDir;
+using testing::SameBits;
 
 constexpr uint64_t kKey = 0x1234567890abcdefull;
 
@@ -69,22 +53,17 @@ TEST(Checkpoint, ResumedSolveIsBitIdentical) {
     full.Run();
     ASSERT_GE(full.stats().batches, 3) << "the scene should need several batches";
     EXPECT_EQ(boundaries, full.stats().batches + 1);  // after the direct pass and each batch
-    const std::vector<float> want = Values(full);
+    const std::vector<float> want = FieldBits(full);
 
     // Without a hook: the same bits (the hook only observes).
     Solver plain(box.scene, box.charts, box.vis, Options());
     plain.Run();
-    EXPECT_TRUE(SameBits(Values(plain), want));
+    EXPECT_TRUE(SameBits(FieldBits(plain), want));
 
     for (int stop_at : {0, 1, 2}) {
         const std::string dir = FreshDir("checkpoint");
         Solver first(box.scene, box.charts, box.vis, Options());
-        first.SetBatchHook([&](int next) {
-            if (next < stop_at)
-                return true;
-            WriteCheckpoint(dir, first, kKey);
-            return false;
-        });
+        testing::StopWithCheckpointAt(first, dir, kKey, stop_at);
         first.Run();
         EXPECT_EQ(first.stats().stop_reason, "interrupted");
         ASSERT_TRUE(fs::exists(CheckpointPath(dir)));
@@ -97,7 +76,7 @@ TEST(Checkpoint, ResumedSolveIsBitIdentical) {
         Solver second(box.scene, box.charts, box.vis, Options());
         second.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
         second.Run();
-        EXPECT_TRUE(SameBits(Values(second), want)) << "stopped before batch " << stop_at;
+        EXPECT_TRUE(SameBits(FieldBits(second), want)) << "stopped before batch " << stop_at;
         EXPECT_EQ(second.stats().batches, full.stats().batches);
         EXPECT_EQ(second.stats().shots, full.stats().shots);
         EXPECT_EQ(second.stats().rays, full.stats().rays);

@@ -52,7 +52,8 @@ TEST(ChartField, ValuesOnlyFieldEvaluatesAndSubdivides) {
         for (int k = 0; k < full.stride(); ++k)
             full.value(n)[k] = float(n * 10 + size_t(k));
     ChartField values(1, 3);
-    values.Assign(full.nodes(), full.values(), {});
+    values.Assign({full.nodes().begin(), full.nodes().end()},
+                  {full.values().begin(), full.values().end()}, {});
     EXPECT_FALSE(values.has_unshot());
     EXPECT_TRUE(full.has_unshot());
     EXPECT_EQ(values.MemoryBytes(),

@@ -21,12 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string FreshDir(const std::string& name) {
-    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p.string();
-}
+using testing::FreshDir;
 
 // A wavy patch's geometry image at res x res.
 stream::GeometryImage Wavy(int res, double phase) {
@@ -50,7 +45,7 @@ bool SameBytes(std::span<const stream::GeometryTexel> a,
 }
 
 TEST(GeometryCache, ViewsHoldTheBytesAndSampleLikeTheImage) {
-    const std::string dir = FreshDir("geocache-views");
+    const std::string dir = FreshDir("geocache-views", false);
     GeometryCache cache(dir, 0);
     std::vector<stream::GeometryImage> images = {Wavy(32, 0), Wavy(8, 1), Wavy(64, 2)};
     for (const auto& img : images)
@@ -79,7 +74,7 @@ TEST(GeometryCache, ViewsHoldTheBytesAndSampleLikeTheImage) {
 }
 
 TEST(GeometryCache, PinsAndLeastRecentlyUsedEviction) {
-    const std::string dir = FreshDir("geocache-lru");
+    const std::string dir = FreshDir("geocache-lru", false);
     const stream::GeometryImage img = Wavy(32, 0);  // 1365 texels: 87,360 bytes
     const uint64_t bytes = 1365 * sizeof(stream::GeometryTexel);
     GeometryCache cache(dir, 2 * bytes);  // two unpinned pyramids may stay
@@ -123,7 +118,7 @@ TEST(GeometryCache, PinsAndLeastRecentlyUsedEviction) {
 }
 
 TEST(GeometryCache, EvictionLeavesResidentMemory) {
-    const std::string dir = FreshDir("geocache-rss");
+    const std::string dir = FreshDir("geocache-rss", false);
     GeometryCache cache(dir, 0);
     const stream::GeometryImage img = Wavy(512, 0);  // 22 MB
     cache.Add(img);
@@ -169,18 +164,13 @@ std::vector<float> Solve(const Room& room, const std::vector<SolveChart>& charts
     opt.settings.stop_fraction = 1e-6;
     Solver solver(room.scene, charts, room.vis, opt);
     solver.Run();
-    std::vector<float> all;
-    for (const auto& f : solver.fields()) {
-        all.insert(all.end(), f.values().begin(), f.values().end());
-        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
-    }
-    return all;
+    return testing::FieldBits(solver);
 }
 
 TEST(GeometryCache, SolveOverEvictedPyramidsGivesTheSameBits) {
     const Room room;
     const std::vector<float> in_memory = Solve(room, room.charts);
-    const std::string dir = FreshDir("geocache-solve");
+    const std::string dir = FreshDir("geocache-solve", false);
     GeometryCache cache(dir, 0);  // every unpin evicts
     std::vector<SolveChart> charts = room.charts;
     for (const auto& img : room.images)

@@ -199,7 +199,8 @@ TEST(MultiEmitter, BitIdenticalForAnyThreadCount) {
         Fig7 f(2.0);
         Solver s(f.scene, f.charts, f.vis, Options(true, 1e-2));
         s.Run();
-        return s.fields()[0].values();
+        const auto v = s.fields()[0].values();
+        return std::vector<float>(v.begin(), v.end());
     };
     const auto one = run(1), two = run(2);
     ASSERT_EQ(one.size(), two.size());

@@ -3,12 +3,17 @@
 // and as the triangles of its (res+1)^2 corner grid for visibility.
 #pragma once
 
+#include "solve/checkpoint.h"
 #include "solve/polygon_light.h"
 #include "solve/scene.h"
 #include "solve/solver.h"
 #include "solve/visibility.h"
 
+#include <cstring>
+#include <filesystem>
 #include <functional>
+#include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace mebake::solve::testing {
@@ -98,5 +103,40 @@ struct LitBox {
         vis.Commit();
     }
 };
+
+// A fresh, empty directory under the temporary directory, for this process; with
+// `solve`, a bake directory's solve/ inside (where checkpoints and pools go).
+inline std::string FreshDir(const std::string& name, bool solve = true) {
+    namespace fs = std::filesystem;
+    fs::path p = fs::temp_directory_path() / ("mebake-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(solve ? p / "solve" : p);
+    return p.string();
+}
+
+// Every field's value and unshot coefficients, chart after chart (each pinned to be read).
+inline std::vector<float> FieldBits(const Solver& s) {
+    std::vector<float> all;
+    for (const auto& f : s.fields()) {
+        const RegionPin pin = f.Pin();
+        all.insert(all.end(), f.values().begin(), f.values().end());
+        all.insert(all.end(), f.unshots().begin(), f.unshots().end());
+    }
+    return all;
+}
+
+// Makes `s` write a checkpoint into `dir` and stop at the boundary before batch `stop_at`.
+inline void StopWithCheckpointAt(Solver& s, const std::string& dir, uint64_t key, int stop_at) {
+    s.SetBatchHook([&s, dir, key, stop_at](int next) {
+        if (next < stop_at)
+            return true;
+        WriteCheckpoint(dir, s, key);
+        return false;
+    });
+}
+
+inline bool SameBits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
 
 }  // namespace mebake::solve::testing
