@@ -55,15 +55,12 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
 }
 
 Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
-    // A smooth, continuous normal field: the geometry pyramid at cells of 8 light-map
-    // texels (at least 8 x 8 per chart), interpolated. Continuity matters: where light
-    // grazes, a horizon that jumped from node to node showed as blocks. The cells follow
-    // world size, not the chart: on a large chart an 8 x 8 grid spanned a bunny's ear, and
-    // its horizon tilted away from the surface (lit points went dark).
-    const int finest = sc.geometry.finest_level();
-    const int texel = sc.max_level >= 0 ? sc.max_level : finest;
-    const int level = std::min(finest, std::max(3, texel - 3));
-    return SampleBilinear(sc.geometry, level, u, v).normal;
+    // A smooth, continuous normal field: the geometry pyramid at 8 x 8 per chart,
+    // interpolated. Continuity matters: where light grazes, a horizon that jumped from
+    // node to node showed as blocks.
+    constexpr int kHorizonLevel = 3;
+    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()), u, v)
+        .normal;
 }
 
 Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
