@@ -234,8 +234,7 @@ public:
           ng_(order_ + 1),
           finest_(sc_.geometry.finest_level()),
           eps_(solver.RayOffset(receiver)),
-          tolerance_(field_,
-                     solver.LinkToleranceScale(),
+          tolerance_(field_, solver.LinkToleranceScale(),
                      solver.opt_.link_floor * solver.reference_),
           coeffs_(size_t(field_.stride())) {
         receiver_tau_ = solver.ReceiverTau();

@@ -49,8 +49,8 @@ struct SolveOptions {
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
     // Error-driven link refinement (link_refine.h): a link also stops when its irradiance
-    // bound is within link_tolerance x tolerance x the receiver node's irradiance (at least
-    // link_floor x the reference irradiance); 0 turns it off.
+    // bound is within link_tolerance x tolerance x 2^-batch x the receiver node's
+    // irradiance (at least link_floor x the reference irradiance); 0 turns it off.
     double link_tolerance = 1;
     double link_floor = 0.02;
     double batch_fraction = 0.05;   // shoot charts with power >= this x the largest
