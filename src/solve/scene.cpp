@@ -155,6 +155,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->sky_directions = s.value("sky_directions", o->sky_directions);
     o->light_samples = s.value("light_samples", o->light_samples);
     o->cluster_links = s.value("cluster_links", o->cluster_links);
+    o->link_tolerance = s.value("link_tolerance", o->link_tolerance);
     if (o->order < 0 || o->order > 3) InputError({scene_file}, "solver.order must be 0..3");
     const std::string multi = s.value("multi_emitter", std::string("full"));
     if (multi != "full" && multi != "simplify")

@@ -55,6 +55,7 @@ struct SolverSettings {
     // (full), true = extremal boundaries and the L2 simplification of seed 002 (simplify).
     bool multi_emitter_simplify = false;
     bool cluster_links = true;    // far receivers through cluster links (cluster_links.cpp)
+    double link_tolerance = 1;    // error-driven link refinement (link_refine.h); 0: off
 };
 
 struct Scene {

@@ -454,6 +454,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     so.ray_offset = float(diag * 2e-5 + m.proxy_deviation);
     so.shoot_emission = shoot_emission;
     so.cluster_links = scene.solver.cluster_links;
+    so.link_tolerance = scene.solver.link_tolerance;
     if (!scene.solver.cluster_links)
         so.link_probes = 0;  // the chart-by-chart solve of before, for comparisons
     spdlog::info("solving {} charts, order M{}, {}, tolerance {}", charts.size(), so.settings.order,

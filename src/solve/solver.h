@@ -50,6 +50,11 @@ struct SolveOptions {
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
+    // Error-driven link refinement (link_refine.h): a link also stops when its irradiance
+    // bound is within link_tolerance x tolerance x 2^-batch x the receiver node's
+    // irradiance (at least link_floor x the reference irradiance); 0 turns it off.
+    double link_tolerance = 1;
+    double link_floor = 0.02;
     double batch_fraction = 0.05;   // shoot charts with power >= this x the largest
     size_t emitter_group = 64;      // shooters built and gathered together (memory)
     bool shoot_emission = true;     // emissive materials shoot their emission in batch 0
@@ -165,6 +170,7 @@ private:
     float ClusterVisibility(const ClusterTree::Node& node, const Emitter& em,
                             SegmentBatch* batch, bool* valid) const;
     double ReceiverTau() const;
+    double LinkToleranceScale() const;  // link_refine.h: the allowance per unit irradiance
     double ReferenceIrradiance() const;
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
     void CountNodes();
