@@ -9,6 +9,7 @@
 #include "solve/direct.h"
 #include "solve/extremal_boundary.h"
 #include "solve/multi_emitter.h"
+#include "solve/multi_emitter_debug.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
 #include "solve/solver.h"
@@ -180,7 +181,9 @@ struct Solver::SimplifiedFit {
     DirectSampler& medium;
     uint32_t chart;
     std::vector<uint8_t> known{};
-    size_t closed = 0, washed = 0, marked = 0;  // nodes tested each way
+    size_t closed = 0, washed = 0, marked = 0;     // nodes tested each way
+    NodeTest last = NodeTest::kCap;                // SimplifiedNode's test of its last node
+    std::unordered_map<size_t, NodeTest> tests{};  // per node, for --multi-emitter-debug
 };
 
 void Solver::RefineDirect(uint32_t chart) {
@@ -232,6 +235,9 @@ void Solver::RefineDirect(uint32_t chart) {
                       "tested closed-form {}, light-penumbra kept {}, refined {}; fit {:.4f} CPU s",
                       chart, eb.sample_points(), cpu_boundary, simplified.closed, simplified.washed,
                       simplified.marked, ThreadCpuSeconds() - cpu_start - cpu_boundary);
+        if (!opt_.multi_emitter_debug.empty())
+            WriteMultiEmitterPng(fmt::format("{}/chart-{}.png", opt_.multi_emitter_debug, chart),
+                                 eb, fields_[chart], simplified.tests);
     } else {
         FitDirectLights(chart, sampler, min_level, max_level, nullptr);
         spdlog::debug("chart {}: direct light fit {:.4f} CPU s", chart,
@@ -264,6 +270,7 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
         sampler.known = sf.known;
         sampler.Evaluate(node, false);
         ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+        sf.last = control ? NodeTest::kLightLight : NodeTest::kCap;
         if (!control)
             return 0;
         ++sf.closed;
@@ -275,6 +282,7 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
             std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sf.fine.gauss_vals), floor});
         return err > tol * scale ? err : 0;
     }
+    sf.last = NodeTest::kLightPenumbra;
     sf.medium.known = sf.known;
     sf.medium.Evaluate(node, false);
     const std::vector<float>& values = sf.medium.gauss_vals;
@@ -319,6 +327,8 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         const bool control = int(node.level) < max_level;
         if (simplified) {
             const float err = SimplifiedNode(node, control, sampler, *simplified, coeffs);
+            if (!opt_.multi_emitter_debug.empty())
+                simplified->tests[n] = simplified->last;
             std::copy(coeffs.begin(), coeffs.end(), field.value(n));
             std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
             if (err > 0)
