@@ -18,11 +18,13 @@ enum class NodeTest : uint8_t {
     kCap,            // at the depth cap: fitted, not tested
     kLightLight,     // every light lit or in umbra: closed form, L2 test
     kLightPenumbra,  // some light in penumbra: sampled, residual test
+    kSingle,         // one light reaches it, in penumbra: control grid as in full
 };
 
 // Writes `path` (PNG): one panel per light (lit yellow, umbra dark blue, penumbra red,
 // unresolved grey, region borders black), then the field's leaves coloured by `tests`
-// (node index -> test; light-light green, light-penumbra orange, cap red, none grey),
+// (node index -> test; light-light green, light-penumbra orange, one light blue, cap red,
+// none grey),
 // outlined. Panels are 256 x 256 pixels, four to a row.
 void WriteMultiEmitterPng(const std::string& path, const ExtremalBoundaries& eb,
                           const ChartField& field,

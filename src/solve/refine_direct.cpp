@@ -181,7 +181,7 @@ struct Solver::SimplifiedFit {
     DirectSampler& medium;
     uint32_t chart;
     std::vector<uint8_t> known{};
-    size_t closed = 0, washed = 0, marked = 0;     // nodes tested each way
+    size_t closed = 0, washed = 0, marked = 0, single = 0;  // nodes tested each way
     NodeTest last = NodeTest::kCap;                // SimplifiedNode's test of its last node
     std::unordered_map<size_t, NodeTest> tests{};  // per node, for --multi-emitter-debug
 };
@@ -232,9 +232,11 @@ void Solver::RefineDirect(uint32_t chart) {
         SimplifiedFit simplified{eb, fine, medium, chart};
         FitDirectLights(chart, sampler, min_level, max_level, &simplified);
         spdlog::debug("chart {}: multi-emitter: {} boundary samples ({:.4f} CPU s); nodes "
-                      "tested closed-form {}, light-penumbra kept {}, refined {}; fit {:.4f} CPU s",
-                      chart, eb.sample_points(), cpu_boundary, simplified.closed, simplified.washed,
-                      simplified.marked, ThreadCpuSeconds() - cpu_start - cpu_boundary);
+                      "tested closed-form {}, one light {}, light-penumbra kept {}, refined {}; "
+                      "fit {:.4f} CPU s",
+                      chart, eb.sample_points(), cpu_boundary, simplified.closed, simplified.single,
+                      simplified.washed, simplified.marked,
+                      ThreadCpuSeconds() - cpu_start - cpu_boundary);
         if (!opt_.multi_emitter_debug.empty())
             WriteMultiEmitterPng(fmt::format("{}/chart-{}.png", opt_.multi_emitter_debug, chart),
                                  eb, fields_[chart], simplified.tests);
@@ -280,6 +282,20 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
                                        sf.fine.gauss_vals.data());
         const float scale =
             std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sf.fine.gauss_vals), floor});
+        return err > tol * scale ? err : 0;
+    }
+    // One light reaching the node, in penumbra: nothing washes its shadow out, so the node
+    // is tested as in full (the control grid, max norm); the others cost no ray.
+    if (std::count_if(sf.known.begin(), sf.known.end(), [](uint8_t k) { return k != 3; }) <= 1) {
+        ++sf.single;
+        sf.last = NodeTest::kSingle;
+        sampler.known = sf.known;
+        sampler.Evaluate(node, true);
+        ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+        const float scale =
+            std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
+        const float err =
+            ControlGridError(order, order + 2, coeffs.data(), blocks, sampler.ctrl_vals.data());
         return err > tol * scale ? err : 0;
     }
     sf.last = NodeTest::kLightPenumbra;
