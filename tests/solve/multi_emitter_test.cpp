@@ -155,6 +155,16 @@ TEST(MultiEmitter, L2MeasuresByGaussLegendre) {
     for (float& v : values)
         v -= 1;
     EXPECT_NEAR(GaussL2Error(order, n, coeffs, 1, values), 1.0f, 1e-5f);
+    EXPECT_NEAR(GaussResidualMax(order, n, coeffs, 1, values), 1.0f, 1e-5f);
+    // One point off by 1: the largest residual is 1, the L2 norm the square root of that
+    // point's weight (the weights sum to 1), which the largest residual bounds.
+    values[7] += 1;
+    double s, t, w;
+    GaussPoint2D(n, 7, &s, &t, &w);
+    for (float& v : values)
+        v += 1;
+    EXPECT_NEAR(GaussResidualMax(order, n, coeffs, 1, values), 1.0f, 1e-5f);
+    EXPECT_NEAR(GaussL2Error(order, n, coeffs, 1, values), std::sqrt(w), 1e-5f);
     EXPECT_NE(KnownCode(std::vector<uint8_t>{2, 0}), KnownCode(std::vector<uint8_t>{0, 2}));
     EXPECT_EQ(KnownCode(std::vector<uint8_t>{0, 0, 0}), 0u);
 }
