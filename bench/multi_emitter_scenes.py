@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
 """Scene files of bench/RESULTS.md, "Issue 15": the bunny (bun_zipper.ply) lit by N square
 lights on a ring, and McGuire's Cornell box with its lamp off and N ceiling lights.
-Usage: multi_emitter_scenes.py OUTDIR [NAME=BAKE_DIR ...]
+Usage: multi_emitter_scenes.py OUTDIR [NAME=BAKE_DIR ...] [--veach VEACH_MIS_XML]
 writes bunnyN.json, cornellN.json (direct light only) and bunnyNb.json, cornellNb.json
 (with the default bounces) for N = 1, 2, 4, 8; for each NAME=BAKE_DIR (an ingested scan) also
-NAMEN.json and NAMENb.json: the bunny's ring scaled to the scan's bounding box (manifest.json)."""
+NAMEN.json and NAMENb.json: the bunny's ring scaled to the scan's bounding box (manifest.json);
+with --veach also veach5.json / veach5b.json: the five sphere lights of Veach's plates scene
+(Mitsuba XML) as octagons of the same area facing the plates (all surfaces albedo 0.4)."""
+import re
 import json
 import math
 import os
@@ -52,6 +55,34 @@ def write(out, name, scene):
     json.dump(scene, open(os.path.join(out, f"{name}b.json"), "w"), indent=1)
 
 
+def octagon(centre, towards, radius, radiance):
+    """An octagon of the area of a disc of `radius`, centred at `centre`, facing `towards`."""
+    front = unit([towards[i] - centre[i] for i in range(3)])
+    up = [0, 1, 0] if abs(front[1]) < 0.9 else [1, 0, 0]
+    t = unit(cross(up, front))
+    b = cross(front, t)
+    r = radius * math.sqrt(math.pi / (2 * math.sqrt(2)))
+    verts = [[round(centre[i] + r * (math.cos(a) * t[i] + math.sin(a) * b[i]), 6) for i in range(3)]
+             for a in (2 * math.pi * k / 8 for k in range(8))]
+    return {"type": "polygon", "vertices": verts, "radiance": radiance}
+
+
+def veach(out, xml):
+    """Veach's plates: each emitting sphere becomes an octagon facing the camera's target."""
+    text = open(xml).read()
+    lights = []
+    for shape in re.findall(r'<shape type="sphere">(.*?)</shape>', text, re.S):
+        c = re.search(r'name="center" x="([-\d.]+)" y="([-\d.]+)" z="([-\d.]+)"', shape)
+        r = re.search(r'name="radius" value="([-\d.]+)"', shape)
+        e = re.search(r'<emitter.*?name="radiance" value="([^"]+)"', shape, re.S)
+        if not (c and r and e):
+            continue
+        rad = [float(x) for x in re.split(r"[,\s]+", e.group(1).strip())]
+        lights.append(octagon([float(x) for x in c.groups()], [0, -2, 2.5], float(r.group(1)), rad))
+    write(out, f"veach{len(lights)}", {"materials": [{"albedo": 0.4}], "lights": lights,
+                                       "sky": {"type": "none"}, "default_rig": False})
+
+
 def main(out, scans):
     os.makedirs(out, exist_ok=True)
     # The bunny's numbers of session 5: centre and a ring of radius 0.35.
@@ -79,4 +110,9 @@ def main(out, scans):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else ".", sys.argv[2:])
+    args = sys.argv[2:]
+    if "--veach" in args:
+        i = args.index("--veach")
+        veach(sys.argv[1], args[i + 1])
+        del args[i:i + 2]
+    main(sys.argv[1] if len(sys.argv) > 1 else ".", args)

@@ -213,8 +213,9 @@ void Solver::RefineDirect(uint32_t chart) {
     DirectSampler sampler(*this, sc, order, max_level, direct);
     const double cpu_start = ThreadCpuSeconds();
     if (opt_.settings.multi_emitter_simplify && direct.has_lights()) {
-        // Extremal boundaries first (a few rays per sample), then the fit with the lights
-        // known lit or hidden taken in closed form and the L2 tests (multi_emitter.h).
+        // Extremal boundaries first (a few rays per sample): they choose each node's test
+        // (multi_emitter.h). A node's samples are still traced, so a shadow the pass
+        // missed between its samples shows wherever a node's sample falls in it.
         const int finest = sc.geometry.finest_level();
         const ExtremalBoundaries eb(
             direct,
@@ -252,14 +253,14 @@ void Solver::RefineDirect(uint32_t chart) {
 }
 
 // One node under --multi-emitter simplify (seed 002, section 5): its fit into coeffs, and
-// the error to refine it by (0: keep it). Lights whose extremal-boundary class is lit or
-// umbra cost no ray. Light-light (every light known): the fit at the (M+1)^2 Gauss points
-// is tested against the closed form in L2 by the (M+3)^2 rule, no ray. Light-penumbra (some
-// light in penumbra): the combined light at (M+2)^2 Gauss points (known lights closed form,
-// the others traced), the node's polynomial its L2 projection (the simple biquadratic at
-// M2), tested by the L2 residual at those points. Either way the test is against the
-// tolerance times the combined light's largest value over the node, so one light's shadow
-// that the others wash out passes (docs/method.md, "Several sources").
+// the error to refine it by (0: keep it). Light-light (every light lit or in umbra by the
+// extremal boundaries): the fit at the (M+1)^2 Gauss points is tested in L2 by the (M+3)^2
+// rule against the lights' closed form (no ray), which also catches a shadow the boundary
+// pass missed. Light-penumbra (some light in penumbra, two or more reaching): the combined
+// light at (M+2)^2 Gauss points, the node's polynomial its L2 projection (the simple
+// biquadratic at M2), kept when it misses no sample by more than the tolerance. Both
+// tests are relative to the combined light's largest value over the node, so one light's
+// shadow that the others wash out passes (docs/method.md, "Several sources").
 float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
                              SimplifiedFit& sf, std::vector<float>& coeffs) {
     const ChartField& field = fields_[sf.chart];
@@ -269,7 +270,6 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
     const bool all_known =
         std::find(sf.known.begin(), sf.known.end(), uint8_t(0)) == sf.known.end();
     if (!control || all_known) {
-        sampler.known = sf.known;
         sampler.Evaluate(node, false);
         ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
         sf.last = control ? NodeTest::kLightLight : NodeTest::kCap;
@@ -285,11 +285,10 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
         return err > tol * scale ? err : 0;
     }
     // One light reaching the node, in penumbra: nothing washes its shadow out, so the node
-    // is tested as in full (the control grid, max norm); the others cost no ray.
+    // is tested as in full (the control grid, max norm).
     if (std::count_if(sf.known.begin(), sf.known.end(), [](uint8_t k) { return k != 3; }) <= 1) {
         ++sf.single;
         sf.last = NodeTest::kSingle;
-        sampler.known = sf.known;
         sampler.Evaluate(node, true);
         ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
         const float scale =
@@ -299,7 +298,6 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
         return err > tol * scale ? err : 0;
     }
     sf.last = NodeTest::kLightPenumbra;
-    sf.medium.known = sf.known;
     sf.medium.Evaluate(node, false);
     const std::vector<float>& values = sf.medium.gauss_vals;
     const int nm = sf.medium.order() + 1;
