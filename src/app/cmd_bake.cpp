@@ -79,6 +79,7 @@ int RunSolve(const SolveCommand& c) {
     opt.memory = ParseMemory(c.memory);
     opt.radiosity = c.unknown == "radiosity";
     opt.multi_emitter = c.multi_emitter;
+    opt.multi_emitter_debug = c.multi_emitter_debug;
     opt.stats_file = c.stats_file;
     opt.checkpoint_interval = c.checkpoint_interval;
     opt.resume = c.resume;

@@ -55,6 +55,7 @@ struct SolveCommand {
     std::string memory = "1G";
     std::string unknown = "irradiance";
     std::string multi_emitter;  // full | simplify; empty: the scene file's (default full)
+    std::string multi_emitter_debug;  // directory for the per-chart simplify pictures
     std::string stats_file;
     double checkpoint_interval = 30;  // seconds between checkpoints (0: every batch; < 0: never)
     bool resume = false;              // continue from the last good checkpoint

@@ -144,6 +144,10 @@ int main(int argc, char** argv) {
                         "or simplify (extremal boundaries + L2 simplification, seed 002); default: "
                         "the scene file's solver.multi_emitter, else full")
         ->check(CLI::IsMember({"full", "simplify"}));
+    sol_cmd->add_option("--multi-emitter-debug", sol.multi_emitter_debug,
+                        "With --multi-emitter simplify: write DIR/chart-N.png per chart, each "
+                        "light's lit/umbra/penumbra regions and the direct light's final "
+                        "quadtree by test (docs/method.md, \"Several sources\")");
     sol_cmd->add_option("--stats", sol.stats_file, "Also write the statistics (JSON) here");
     sol_cmd->add_option("--checkpoint-interval", sol.checkpoint_interval,
                         "Seconds between checkpoints (solve/checkpoint.bin; 0: every batch, "

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <ctime>
 
 namespace mebake::solve {
 
@@ -19,6 +20,17 @@ float GaussL2Error(int order, int n, const float* coeffs, int blocks, const floa
     for (int k = 0; k < n * n * blocks; ++k)
         diff[size_t(k)] = fit[size_t(k)] - values[k];
     return GaussL2Norm(n, blocks, diff.data());
+}
+
+float GaussResidualMax(int order, int n, const float* coeffs, int blocks, const float* values) {
+    CHECK_LE(n, kMaxGauss);
+    CHECK_LE(blocks, 64);
+    std::array<float, kMaxGauss * kMaxGauss * 64> fit;
+    EvalGauss(order, n, coeffs, blocks, fit.data());
+    float worst = 0;
+    for (int k = 0; k < n * n * blocks; ++k)
+        worst = std::max(worst, std::abs(fit[size_t(k)] - values[k]));
+    return worst;
 }
 
 float GaussL2Norm(int n, int blocks, const float* values) {
@@ -47,6 +59,12 @@ uint32_t KnownCode(std::span<const uint8_t> known) {
     for (uint8_t k : known)
         code = (code ^ k) * 16777619u;
     return code | 0x80000000u;
+}
+
+double ThreadCpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 }  // namespace mebake::solve

@@ -453,6 +453,9 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     so.scene_size = float(diag);
     so.ray_offset = float(diag * 2e-5 + m.proxy_deviation);
     so.shoot_emission = shoot_emission;
+    so.multi_emitter_debug = opt.multi_emitter_debug;
+    if (!opt.multi_emitter_debug.empty())
+        fs::create_directories(opt.multi_emitter_debug);
     so.cluster_links = scene.solver.cluster_links;
     so.link_tolerance = scene.solver.link_tolerance;
     if (!scene.solver.cluster_links)

@@ -24,6 +24,7 @@ struct SolveJobOptions {
     uint64_t memory = uint64_t(1) << 30;
     bool radiosity = false;
     std::string multi_emitter;  // "full" or "simplify"; empty: the scene file's
+    std::string multi_emitter_debug;  // directory for the simplify pictures; empty: none
     std::string stats_file;           // extra copy of the statistics (JSON)
     double checkpoint_interval = 30;  // seconds; 0: at every batch boundary; < 0: only on signals
     bool resume = false;              // continue from a checkpoint / keep a matching solution

@@ -71,6 +71,9 @@ struct SolveOptions {
     // Chart-level links with more pairs than twice this trace this many stratified pairs
     // first and trace the rest only when those disagree (0: one ray per pair always).
     int link_probes = 8;
+    // --multi-emitter simplify: write each chart's classification and refinement as
+    // DIR/chart-N.png here (multi_emitter_debug.h); empty: none.
+    std::string multi_emitter_debug;
 };
 
 struct SolveStats {

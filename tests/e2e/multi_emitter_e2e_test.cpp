@@ -1,7 +1,9 @@
 // `--multi-emitter` through the real binary: a bad value in the scene file is an input
 // error naming the file, a bad command-line value a usage error, and `simplify` on the
 // sample rock with three polygon lights writes the same solution bytes for --threads 1
-// and 2 and the same leaves as a rerun.
+// and 2 and the same leaves as a rerun; --multi-emitter-debug draws a picture per chart
+// (one panel per light and one for the refinement) without changing the solution.
+#include "io/png_writer.h"
 #include "run.h"
 
 #include <gtest/gtest.h>
@@ -58,8 +60,10 @@ TEST(MultiEmitterE2e, BadValuesAreClearErrorsAndSimplifyIsDeterministic) {
     EXPECT_EQ(r.code, 2) << r.out;
     std::string solution[2];
     for (int threads : {1, 2}) {
+        const std::string debug =
+            threads == 2 ? " --multi-emitter-debug " + (tmp / "debug").string() : "";
         r = Capture(kBin + " -q solve " + bake + " -f --scene " + good.string() + " --threads " +
-                    std::to_string(threads) + " --stats " + (tmp / "stats.json").string() +
+                    std::to_string(threads) + " --stats " + (tmp / "stats.json").string() + debug +
                     " 2>&1");
         ASSERT_EQ(r.code, 0) << r.out;
         solution[threads - 1] = Slurp(fs::path(bake) / "solve" / "solution.bin");
@@ -69,6 +73,21 @@ TEST(MultiEmitterE2e, BadValuesAreClearErrorsAndSimplifyIsDeterministic) {
     }
     EXPECT_FALSE(solution[0].empty());
     EXPECT_EQ(solution[0], solution[1]) << "--threads 1 and 2 differ under simplify";
+    // Four panels of 256 x 256 with 4-pixel gaps; some chart has a lit region (yellow).
+    int pictures = 0;
+    bool lit = false;
+    for (const auto& e : fs::directory_iterator(tmp / "debug")) {
+        const std::string bytes = Slurp(e.path());
+        const auto png = mebake::io::DecodePng(
+            std::span(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()));
+        EXPECT_EQ(png.width, 4 * 256 + 3 * 4);
+        EXPECT_EQ(png.height, 256);
+        for (size_t k = 0; k + 2 < png.pixels.size(); k += size_t(png.channels))
+            lit |= png.pixels[k] == 250 && png.pixels[k + 1] == 215 && png.pixels[k + 2] == 80;
+        ++pictures;
+    }
+    EXPECT_GT(pictures, 0);
+    EXPECT_TRUE(lit);
     fs::remove_all(tmp);
 }
 
