@@ -27,7 +27,7 @@
 #include "solve/solver.h"
 
 #include "core/check.h"
-#include "solve/task_graph.h"
+#include "core/task_graph.h"
 
 #include <algorithm>
 #include <memory>

@@ -1,6 +1,6 @@
 // TaskGraph: every node runs once, after all of its predecessors, on any thread count;
 // an exception stops the graph and is rethrown.
-#include "solve/task_graph.h"
+#include "core/task_graph.h"
 
 #include "core/parallel.h"
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake {
 namespace {
 
 TEST(TaskGraph, NodesRunOnceAfterTheirPredecessors) {
@@ -64,4 +64,4 @@ TEST(TaskGraph, AnExceptionStopsTheGraphAndIsRethrown) {
 }
 
 }  // namespace
-}  // namespace mebake::solve
+}  // namespace mebake

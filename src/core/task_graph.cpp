@@ -1,10 +1,10 @@
-#include "solve/task_graph.h"
+#include "core/task_graph.h"
 
 #include "core/check.h"
 
 #include <utility>
 
-namespace mebake::solve {
+namespace mebake {
 
 TaskGraph::Node TaskGraph::Add(std::function<void()> fn) {
     nodes_.emplace_back();
@@ -54,4 +54,4 @@ void TaskGraph::Run() {
         std::rethrow_exception(error_);
 }
 
-}  // namespace mebake::solve
+}  // namespace mebake

@@ -2,7 +2,7 @@
 // runs once, after all of its predecessors, and nodes whose predecessors are done run
 // concurrently, with no barrier between phases. Results stay deterministic when every
 // piece of data is written by nodes that the edges order among themselves (the solver's
-// batch graph: shoot_graph.cpp).
+// batch graph: solve/shoot_graph.cpp).
 #pragma once
 
 #include "core/parallel.h"
@@ -15,7 +15,7 @@
 #include <mutex>
 #include <vector>
 
-namespace mebake::solve {
+namespace mebake {
 
 class TaskGraph {
 public:
@@ -47,4 +47,4 @@ private:
     std::exception_ptr error_;
 };
 
-}  // namespace mebake::solve
+}  // namespace mebake
