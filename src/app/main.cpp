@@ -19,6 +19,12 @@
 
 namespace {
 
+// --up of ingest and bake (stream/up_axis.h states the rule).
+constexpr const char* kUpHelp =
+    "The scans' up axis x, y, z, -x, -y or -z (default: detected: the direction whose lowest "
+    "1 % of vertices spans the largest support, if clearly; else +y); the default light, "
+    "camera and --ground stand on it";
+
 using mebake::io::MeshFormat;
 
 // CLI11 validator/transform for --format.
@@ -114,10 +120,7 @@ int main(int argc, char** argv) {
     ing_cmd->add_flag("--ground", ing.ground,
                       "Add a ground plane under the scans (at the bounding box's floor along the up "
                       "axis, see --up; 3x the object's width, albedo 0.4)");
-    ing_cmd->add_option("--up", ing.up,
-                        "The scans' up axis x, y, z, -x, -y or -z (default: detected: the direction whose lowest "
-                      "1 %% of vertices spans the largest support, if clearly; else +y); the default "
-                      "light, camera and --ground stand on it");
+    ing_cmd->add_option("--up", ing.up, kUpHelp);
     ing_cmd->add_flag("--keep-winding", ing.keep_winding,
                       "Keep every component's winding as read. Default: a closed or nearly closed "
                       "component wound inwards (negative enclosed volume) is turned outwards, "
@@ -310,10 +313,7 @@ int main(int argc, char** argv) {
                      "Add a ground plane under the scan that receives its shadow and bounces "
                      "light (at the bounding box's floor along the up axis, see --up; 3x the object's "
                      "width, albedo 0.4)");
-    bk_cmd->add_option("--up", bk.up,
-                       "The scans' up axis x, y, z, -x, -y or -z (default: detected: the direction whose lowest "
-                       "1 %% of vertices spans the largest support, if clearly; else +y); the default "
-                       "light, camera and --ground stand on it");
+    bk_cmd->add_option("--up", bk.up, kUpHelp);
     bk_cmd->add_flag("-f,--force", bk.force,
                      "Start over in an existing directory (without it, a bake resumes there)");
 
