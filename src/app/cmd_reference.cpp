@@ -86,7 +86,7 @@ output::ProbeError Score(const output::BakeView& view, const std::vector<output:
 }  // namespace
 
 int RunReference(const ReferenceCommand& c) {
-    if (!c.images.empty())
+    if (!c.images.empty() || !c.rule_images.empty())
         return RunReferenceImage(c);
     if (!c.eye.empty() || !c.look_at.empty() || !c.up.empty())
         UsageError("reference: --eye, --target x,y,z and --up need --image");

@@ -61,29 +61,47 @@ Camera ResolveCamera(const ReferenceCommand& c, const stream::Manifest& m,
     return cam;
 }
 
+// The picture (rgb, with coverage, standard errors and charts in an EXR) or, with rule, the
+// display-rule picture (ReferenceImage::rule, with coverage and charts: its noise is not
+// estimated).
 void WriteImage(const reference::ReferenceImage& img, const std::string& path,
-                const output::ToneMap& tone) {
+                const output::ToneMap& tone, bool rule = false) {
+    const std::vector<float>& rgb = rule ? img.rule : img.rgb;
     if (Extension(path) == ".png") {
         output::RenderedImage r;  // render's PNG writer: the same tone mapping, byte for byte
         r.width = img.width;
         r.height = img.height;
-        r.rgb = img.rgb;
+        r.rgb = rgb;
         output::WriteRenderedImage(r, path, tone);
         return;
     }
     if (Extension(path) != ".exr")
         UsageError("--image {}: expected a .exr or .png file name", path);
     const size_t n = size_t(img.width) * size_t(img.height);
+    io::ExrOptions eo;
+    eo.type = io::ExrPixelType::Float;
+    if (rule) {
+        std::vector<float> px(n * 5);
+        for (size_t p = 0; p < n; ++p) {
+            float* o = &px[p * 5];
+            o[0] = rgb[3 * p], o[1] = rgb[3 * p + 1], o[2] = rgb[3 * p + 2];
+            o[3] = img.coverage[p];
+            o[4] = float(img.chart[p]);
+        }
+        eo.comments = "mebake reference --rule-image: (pi Le + rho (n.E)+)/pi with the path-traced "
+                      "vector irradiance E (W/m^2/sr) in R G B, coverage in A, chart of the first "
+                      "ray's hit in chart (-1: none)";
+        io::WriteExr(path, img.width, img.height, {"R", "G", "B", "A", "chart"}, px, eo);
+        return;
+    }
     std::vector<float> px(n * 8);
     for (size_t p = 0; p < n; ++p) {
         float* o = &px[p * 8];
-        o[0] = img.rgb[3 * p], o[1] = img.rgb[3 * p + 1], o[2] = img.rgb[3 * p + 2];
+        o[0] = rgb[3 * p], o[1] = rgb[3 * p + 1], o[2] = rgb[3 * p + 2];
         o[3] = img.coverage[p];
         o[4] = img.se[3 * p], o[5] = img.se[3 * p + 1], o[6] = img.se[3 * p + 2];
         o[7] = float(img.chart[p]);  // exact below 2^24 charts
     }
-    io::ExrOptions eo;
-    eo.type = io::ExrPixelType::Float;
     eo.comments = "mebake reference --image: path-traced radiance (W/m^2/sr) in R G B, "
                   "coverage in A, standard error of R G B in se.R se.G se.B, chart of the first "
                   "ray's hit in chart (-1: none)";
@@ -130,6 +148,9 @@ int RunReferenceImage(const ReferenceCommand& c) {
     for (const std::string& path : c.images)
         if (Extension(path) != ".png" && Extension(path) != ".exr")
             UsageError("--image {}: expected a .exr or .png file name", path);
+    for (const std::string& path : c.rule_images)
+        if (Extension(path) != ".png" && Extension(path) != ".exr")
+            UsageError("--rule-image {}: expected a .exr or .png file name", path);
     const stream::Manifest m = stream::ReadManifest(c.dir);
     if (m.state != "ingested")
         UsageError("{}: ingest did not finish (state '{}')", c.dir, m.state);
@@ -161,6 +182,8 @@ int RunReferenceImage(const ReferenceCommand& c) {
         });
     for (const std::string& path : c.images)
         WriteImage(img, path, tone);
+    for (const std::string& path : c.rule_images)
+        WriteImage(img, path, tone, true);
 
     uint64_t high = 0;  // covered pixels with relative standard error above 3x the target
     for (size_t p = 0; p < img.coverage.size(); ++p) {

@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
     ref_cmd->add_option("--threads", ref.threads, "Worker threads (0: all cores)")->capture_default_str();
     ref_cmd->add_option("-o,--output", ref.output, "JSON output ('-' = stdout)")->capture_default_str();
     ref_cmd->add_option("--image", ref.images, "Path-trace the picture of a view instead of points: .exr (radiance, coverage A, standard errors se.*) or .png (tone-mapped as render); repeatable")->take_all();
+    ref_cmd->add_option("--rule-image", ref.rule_images, "--image: also the light map's display rule (pi Le + rho (n.E)+)/pi applied to the estimated E at the same hits (.exr or .png): the bake's picture if its field were exact")->take_all();
     ref_cmd->add_option("--eye", ref.eye, "--image: camera position x,y,z (default: render's view)")->expected(3)->delimiter(',');
     ref_cmd->add_option("--up", ref.up, "--image: up direction x y z")->expected(3)->delimiter(',');
     ref_cmd->add_option("--fov", ref.fov, "--image: vertical field of view, degrees")->capture_default_str()

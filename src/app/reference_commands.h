@@ -23,6 +23,9 @@ struct ReferenceCommand {
     // --image: a path-traced picture instead of points (.exr: linear radiance, coverage A and
     // standard errors se.R se.G se.B; .png: tone-mapped as render does). Camera as render's.
     std::vector<std::string> images;
+    // --rule-image: the display rule on the estimated vector irradiance at the same hits
+    // (reference_image.h, ReferenceImage::rule): R G B and coverage A, no standard errors.
+    std::vector<std::string> rule_images;
     std::vector<double> eye, look_at, up;  // empty: render's default camera
     double fov = 50;
     std::string size = "800x600";

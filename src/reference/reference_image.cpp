@@ -109,6 +109,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
     // Each pixel: the mean over its rays of B/pi, background or black; errors add in
     // quadrature (the rays' estimates are independent).
     img.rgb.assign(size_t(w) * size_t(h) * 3, 0.f);
+    img.rule.assign(img.rgb.size(), 0.f);
     img.se.assign(img.rgb.size(), 0.f);
     img.coverage.assign(size_t(w) * size_t(h), 0.f);
     img.samples.assign(size_t(w) * size_t(h), 0);
@@ -116,18 +117,23 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
     constexpr double kPi = std::numbers::pi;
     double se2_sum = 0, mean_sum = 0;
     for (size_t pix = 0; pix < size_t(w) * size_t(h); ++pix) {
-        Vec3d sum{}, var{};
+        Vec3d sum{}, var{}, rule{};
         int covered = 0;
         for (size_t s = 0; s < per_pixel; ++s) {
             const size_t r = pix * per_pixel + s;
             if (end[r] == RayEnd::Miss) {
                 sum += Vec3d(Background(scene, opt.background, dir[r]));
+                rule += Vec3d(Background(scene, opt.background, dir[r]));
                 continue;
             }
             ++covered;
             if (end[r] == RayEnd::Front) {
                 const ReferencePoint& p = points[point_of[r]];
                 sum += p.b / kPi;
+                for (int c = 0; c < 3; ++c)
+                    rule[c] += (kPi * p.emission[c] +
+                                p.albedo[c] * std::max(0.0, Dot(p.normal, p.e[size_t(c)]))) /
+                               kPi;
                 img.samples[pix] += uint32_t(std::min<uint64_t>(p.samples, 0xFFFFFFFFu));
                 for (int c = 0; c < 3; ++c)
                     var[c] += (p.b_se[c] / kPi) * (p.b_se[c] / kPi);
@@ -138,6 +144,7 @@ ReferenceImage RenderReferenceImage(const ReferenceMesh& mesh, const solve::Scen
         const double inv = 1.0 / double(per_pixel);
         for (int c = 0; c < 3; ++c) {
             img.rgb[pix * 3 + size_t(c)] = float(sum[c] * inv);
+            img.rule[pix * 3 + size_t(c)] = float(rule[c] * inv);
             img.se[pix * 3 + size_t(c)] = float(std::sqrt(var[c]) * inv);
         }
         img.coverage[pix] = float(covered * inv);

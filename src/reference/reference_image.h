@@ -39,6 +39,11 @@ struct ReferenceImage {
     std::vector<float> coverage;    // fraction of the pixel's primary rays that hit a surface
     std::vector<uint32_t> samples;  // paths per pixel (over its front-facing rays)
     std::vector<int32_t> chart;     // chart hit by the pixel's first ray; -1: a miss
+    // The light map's display rule applied to the estimated vector irradiance E at the same
+    // hits, (pi Le + rho (n . E)+) / pi, 3 per pixel (background and black as rgb): what a
+    // bake whose field were exact would show, so that picture error splits into what the
+    // rule loses (rule against rgb) and what the bake's field gets wrong (bake against rule).
+    std::vector<float> rule;
     ReferenceStats stats;
     uint64_t points = 0;  // front-facing primary hits whose B was estimated
     // Noise of the picture: RMS over covered pixels of the standard error of the

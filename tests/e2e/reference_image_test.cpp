@@ -2,7 +2,9 @@
 // to be right: a plane under a square light (the closed-form case of bench/accuracy.sh, no
 // occluders, one bounce cannot reach a flat plane). The render of the correct bake must
 // agree with the reference picture; a bake of the same plane with the light 25 % too bright
-// must not. Also: the picture is the same for any thread count, and `mebake compare` on
+// must not. On the plane the display rule B = rho (n . E)+ is exact, so the reference's
+// display-rule picture (--rule-image, the path-traced E through the rule) agrees with the
+// reference and scores the bakes as the reference does. Also: the picture is the same for any thread count, and `mebake compare` on
 // pictures fails clearly on bad input.
 #include "io/exr_writer.h"
 #include "run.h"
@@ -83,7 +85,8 @@ TEST_F(ReferenceImage, RenderOfARightBakeAgreesAndAWrongOneDoesNot) {
               0);
     // The reference of the right scene, 1 % relative standard error per pixel (floored).
     ASSERT_EQ(Mebake("-q reference '" + right + "'" + kView + " --se-target 0.01 --image '" +
-                     P("ref.exr") + "' --image '" + P("ref.png") + "' -o '" + P("ref.json") + "'"),
+                     P("ref.exr") + "' --image '" + P("ref.png") + "' --rule-image '" + P("rule.exr") +
+                     "' -o '" + P("ref.json") + "'"),
               0);
     const io::ExrImage ref = io::ReadExr(P("ref.exr"));
     ASSERT_EQ(ref.width, 64);
@@ -105,6 +108,18 @@ TEST_F(ReferenceImage, RenderOfARightBakeAgreesAndAWrongOneDoesNot) {
     const auto bad = Compare(P("wrong.exr"), P("ref.exr"));
     EXPECT_GT(bad["relative_rms"].get<double>(), 0.15) << bad.dump();  // the light is 25 % off
     EXPECT_GT(bad["relative_p95"].get<double>(), 0.15);
+
+    // The display-rule picture: coverage and charts as the reference, no standard errors.
+    const io::ExrImage rule = io::ReadExr(P("rule.exr"));
+    ASSERT_EQ(rule.width, 64);
+    ASSERT_GE(rule.Channel("A"), 0);
+    EXPECT_LT(rule.Channel("se.R"), 0);
+    const auto rule_ok = Compare(P("rule.exr"), P("ref.exr"));
+    EXPECT_LT(rule_ok["relative_rms"].get<double>(), 0.03) << rule_ok.dump();
+    const auto field_ok = Compare(P("right.exr"), P("rule.exr"), " --mask '" + P("ref.exr") + "'");
+    EXPECT_LT(field_ok["relative_rms"].get<double>(), 0.03) << field_ok.dump();
+    const auto field_bad = Compare(P("wrong.exr"), P("rule.exr"), " --mask '" + P("ref.exr") + "'");
+    EXPECT_GT(field_bad["relative_rms"].get<double>(), 0.15) << field_bad.dump();
 }
 
 TEST_F(ReferenceImage, SamePictureForAnyThreadCount) {
