@@ -61,10 +61,11 @@ int RunCompareImages(const CompareCommand& c) {
     if (d.border_rms)
         noise += fmt::format("; next to chart borders ({} pixels) {:.2f}%, elsewhere {:.2f}%",
                              d.border_pixels, 100 * *d.border_rms, 100 * *d.interior_rms);
-    spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, p95 {:.2f}%, max {:.1f}%; "
-                 "display RMS {:.2f}% ({})",
-                 c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise, 100 * d.relative_p95,
-                 100 * d.relative_max, 100 * d.display_rms,
+    spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, bias {:+.2f}%, p95 {:.2f}%, "
+                 "max {:.1f}%; display RMS {:.2f}% ({})",
+                 c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise,
+                 100 * d.relative_bias, 100 * d.relative_p95, 100 * d.relative_max,
+                 100 * d.display_rms,
                  d.display ? "display values" : "radiance");
     nlohmann::json j;
     j["image"] = c.dir;
@@ -76,6 +77,7 @@ int RunCompareImages(const CompareCommand& c) {
     j["relative_rms"] = d.relative_rms;
     j["relative_p95"] = d.relative_p95;
     j["relative_max"] = d.relative_max;
+    j["relative_bias"] = d.relative_bias;
     j["display_rms"] = d.display_rms;
     if (d.noise_rms) {
         j["reference_noise_rms"] = *d.noise_rms;

@@ -128,7 +128,7 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
         return d.display ? double(Display(im, p, c, tone)) : double(im.rgb[3 * p + size_t(c)]);
     };
     std::vector<double> err;  // per counted pixel, in compared units
-    double sum_ref = 0, sum_err2 = 0, sum_disp2 = 0, sum_se2 = 0;
+    double sum_ref = 0, sum_err2 = 0, sum_disp2 = 0, sum_se2 = 0, sum_diff = 0;
     double border_err2 = 0, interior_err2 = 0;
     const bool has_se = !d.display && (!ref.se.empty() || !image.se.empty());
     for (size_t p = 0; p < n; ++p) {
@@ -139,6 +139,7 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
             const double a = value(image, p, c), b = value(ref, p, c);
             e2 += (a - b) * (a - b) / 3;
             sum_ref += b / 3;
+            sum_diff += (a - b) / 3;
             const double da = Display(image, p, c, tone) - Display(ref, p, c, tone);
             disp2 += da * da / 3;
             for (const ComparedImage* im : {&image, &ref})
@@ -163,6 +164,7 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
     if (!(d.mean_reference > 0))
         InputError({ref.path}, "the reference is black where it is compared");
     d.relative_rms = std::sqrt(sum_err2 / np) / d.mean_reference;
+    d.relative_bias = sum_diff / np / d.mean_reference;
     d.display_rms = std::sqrt(sum_disp2 / np);
     std::sort(err.begin(), err.end());
     d.relative_max = err.back() / d.mean_reference;

@@ -11,6 +11,8 @@
 // with err(p) = sqrt(mean over colours of (a - ref)^2):
 //   relative RMS   sqrt(mean err^2) / mean of the reference (over pixels and colours),
 //   p95, max       of err / mean of the reference,
+//   bias           mean of (a - ref) over pixels and colours / mean of the reference: the
+//                  part of the RMS that is one level (too dark or too bright everywhere),
 //   display RMS    of the tone-mapped sRGB difference (0..1), what a viewer sees,
 //   noise          sqrt(mean se^2) / mean, the reference's own noise (when it has se), and
 //                  the corrected RMS sqrt(max(0, RMS^2 - noise^2)), the error left to the bake;
@@ -48,6 +50,7 @@ struct ImageDifference {
     bool display = false;  // compared in display values (a PNG was involved)
     double mean_reference = 0;
     double relative_rms = 0, relative_p95 = 0, relative_max = 0;
+    double relative_bias = 0;  // signed
     double display_rms = 0;  // sRGB 0..1
     std::optional<double> noise_rms, corrected_rms;
     // With a chart channel: the relative RMS over pixels next to a chart border (a

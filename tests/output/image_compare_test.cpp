@@ -1,5 +1,5 @@
-// output/image_compare.h: identical pictures score 0, a known offset scores its known RMS,
-// coverage limits the pixels, and bad input is an error naming the file.
+// output/image_compare.h: identical pictures score 0, a known offset scores its known RMS
+// and bias, coverage limits the pixels, and bad input is an error naming the file.
 #include "output/image_compare.h"
 
 #include "core/error.h"
@@ -38,7 +38,7 @@ TEST(ImageCompare, IdenticalPicturesScoreZero) {
 
 TEST(ImageCompare, KnownOffsetGivesItsRms) {
     // Reference 2 everywhere; the image is 2.2 on half the pixels and 2 on the rest:
-    // RMS = sqrt(0.5 * 0.2^2) / 2 = 7.07 %, max and p95 = 10 %.
+    // RMS = sqrt(0.5 * 0.2^2) / 2 = 7.07 %, max and p95 = 10 %, bias 0.5 * 0.2 / 2 = 5 %.
     const ComparedImage ref = Flat(10, 10, 2.f);
     ComparedImage im = Flat(10, 10, 2.f);
     for (size_t p = 0; p < 50; ++p)
@@ -48,7 +48,11 @@ TEST(ImageCompare, KnownOffsetGivesItsRms) {
     EXPECT_NEAR(d.relative_rms, std::sqrt(0.5) * 0.1, 1e-6);
     EXPECT_NEAR(d.relative_max, 0.1, 1e-6);
     EXPECT_NEAR(d.relative_p95, 0.1, 1e-6);
+    EXPECT_NEAR(d.relative_bias, 0.05, 1e-6);
     EXPECT_GT(d.display_rms, 0);
+    // The other way round: the same RMS, the opposite bias (2 is 0.2 below 2.2 on half).
+    const ImageDifference back = CompareImages(ref, im, ToneMap{});
+    EXPECT_NEAR(back.relative_bias * back.mean_reference, -0.1, 1e-6);
 }
 
 TEST(ImageCompare, CoverageAndNoise) {
