@@ -84,8 +84,8 @@ print("--eye %.6g,%.6g,%.6g --target %.6g,%.6g,%.6g --up %.6g,%.6g,%.6g" % (*eye
 PY
 }
 
-echo "| case | view | pixels | RMS | reference noise | RMS without noise | p95 | max | display RMS | RMS next to chart borders / elsewhere | rule / field | reference time (s) |" > "$WORK/refimg.md"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|" >> "$WORK/refimg.md"
+echo "| case | view | pixels | RMS | reference noise | RMS without noise | bias | p95 | max | display RMS | RMS next to chart borders / elsewhere | RMS at silhouettes (share of pixels) | rule / field | reference time (s) |" > "$WORK/refimg.md"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" >> "$WORK/refimg.md"
 for c in $CASES; do
   input=$(input_of "$c")
   [ -f "$input" ] || { echo "$c: $input absent, skipped" >&2; continue; }
@@ -124,11 +124,13 @@ d, r = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
 rule, field = json.load(open(sys.argv[5])), json.load(open(sys.argv[6]))
 pct = lambda x: "%.2f %%" % (100 * x)
 border = ("%s / %s" % (pct(d["border_rms"]), pct(d["interior_rms"]))) if "border_rms" in d else "-"
-print("| %s | %s | %d | %s | %s | %s | %s | %s | %s | %s | %s / %s | %.0f (%s) |" % (
+outline = ("%s (%.0f %%)" % (pct(d["silhouette_rms"]), 100 * d["silhouette_pixels"] / d["pixels"])
+           if "silhouette_rms" in d else "-")
+print("| %s | %s | %d | %s | %s | %s | %+.2f %% | %s | %s | %s | %s | %s | %s / %s | %.0f (%s) |" % (
     sys.argv[3], sys.argv[4], d["pixels"], pct(d["relative_rms"]), pct(d["reference_noise_rms"]),
-    pct(d["corrected_rms"]), pct(d["relative_p95"]), pct(d["relative_max"]),
-    pct(d["display_rms"]), border, pct(rule["relative_rms"]), pct(field["relative_rms"]),
-    r["stats"]["seconds"], r["stats"]["stop"]))
+    pct(d["corrected_rms"]), 100 * d["relative_bias"], pct(d["relative_p95"]),
+    pct(d["relative_max"]), pct(d["display_rms"]), border, outline, pct(rule["relative_rms"]),
+    pct(field["relative_rms"]), r["stats"]["seconds"], r["stats"]["stop"]))
 PY
     tail -1 "$WORK/refimg.md"
   done

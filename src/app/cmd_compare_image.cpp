@@ -61,6 +61,9 @@ int RunCompareImages(const CompareCommand& c) {
     if (d.border_rms)
         noise += fmt::format("; next to chart borders ({} pixels) {:.2f}%, elsewhere {:.2f}%",
                              d.border_pixels, 100 * *d.border_rms, 100 * *d.interior_rms);
+    if (d.silhouette_rms)
+        noise += fmt::format("; at the silhouette ({} pixels) {:.2f}%", d.silhouette_pixels,
+                             100 * *d.silhouette_rms);
     spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, bias {:+.2f}%, p95 {:.2f}%, "
                  "max {:.1f}%; display RMS {:.2f}% ({})",
                  c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise,
@@ -87,6 +90,10 @@ int RunCompareImages(const CompareCommand& c) {
         j["border_pixels"] = d.border_pixels;
         j["border_rms"] = *d.border_rms;
         j["interior_rms"] = *d.interior_rms;
+    }
+    if (d.silhouette_rms) {
+        j["silhouette_pixels"] = d.silhouette_pixels;
+        j["silhouette_rms"] = *d.silhouette_rms;
     }
     if (!c.diff.empty())
         j["diff"] = c.diff;

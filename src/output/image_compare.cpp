@@ -47,6 +47,22 @@ bool NearChartBorder(const ComparedImage& im, size_t p) {
     return false;
 }
 
+// Whether compared pixel p has a pixel of its 3 x 3 block that is not compared (the
+// background, or the frame's edge): the object's silhouette, where the view grazes the
+// surface.
+template <typename IsCounted>
+bool OnSilhouette(int width, int height, size_t p, const IsCounted& counted) {
+    const int x = int(p % size_t(width)), y = int(p / size_t(width));
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int u = x + dx, v = y + dy;
+            if (u < 0 || v < 0 || u >= width || v >= height ||
+                !counted(size_t(v) * size_t(width) + size_t(u)))
+                return true;
+        }
+    return false;
+}
+
 void CheckSameSize(const ComparedImage& a, const ComparedImage& b) {
     if (a.width != b.width || a.height != b.height)
         InputError({b.path}, "{}x{} pixels, but {} has {}x{}", b.width, b.height, a.path, a.width,
@@ -129,10 +145,13 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
     };
     std::vector<double> err;  // per counted pixel, in compared units
     double sum_ref = 0, sum_err2 = 0, sum_disp2 = 0, sum_se2 = 0, sum_diff = 0;
-    double border_err2 = 0, interior_err2 = 0;
+    double border_err2 = 0, interior_err2 = 0, silhouette_err2 = 0;
     const bool has_se = !d.display && (!ref.se.empty() || !image.se.empty());
+    auto counted = [&](size_t p) {
+        return Counted(image, p) && Counted(ref, p) && (!mask || Counted(*mask, p));
+    };
     for (size_t p = 0; p < n; ++p) {
-        if (!Counted(image, p) || !Counted(ref, p) || (mask && !Counted(*mask, p)))
+        if (!counted(p))
             continue;
         double e2 = 0, disp2 = 0;
         for (int c = 0; c < 3; ++c) {
@@ -153,6 +172,10 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
             ++d.border_pixels;
         } else {
             interior_err2 += e2;
+        }
+        if (d.masked && OnSilhouette(ref.width, ref.height, p, counted)) {
+            silhouette_err2 += e2;
+            ++d.silhouette_pixels;
         }
         sum_disp2 += disp2;
     }
@@ -175,6 +198,9 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
         d.interior_rms =
             std::sqrt(interior_err2 / double(d.pixels - d.border_pixels)) / d.mean_reference;
     }
+    if (d.silhouette_pixels > 0)
+        d.silhouette_rms =
+            std::sqrt(silhouette_err2 / double(d.silhouette_pixels)) / d.mean_reference;
     if (has_se) {
         d.noise_rms = std::sqrt(sum_se2 / np) / d.mean_reference;
         d.corrected_rms =

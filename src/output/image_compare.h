@@ -17,7 +17,10 @@
 //   noise          sqrt(mean se^2) / mean, the reference's own noise (when it has se), and
 //                  the corrected RMS sqrt(max(0, RMS^2 - noise^2)), the error left to the bake;
 //   border RMS     the relative RMS next to chart borders and away from them, when the
-//                  reference has a chart channel (the reference picture's EXR does).
+//                  reference has a chart channel (the reference picture's EXR does);
+//   silhouette RMS the relative RMS over the pixels whose 3 x 3 block reaches a pixel not
+//                  compared (the background: the object's outline, where the view grazes
+//                  the surface), when a coverage channel limits the pixels.
 #pragma once
 
 #include "output/tonemap.h"
@@ -57,6 +60,8 @@ struct ImageDifference {
     // neighbour of the 3 x 3 block sees another chart) and over the others.
     uint64_t border_pixels = 0;
     std::optional<double> border_rms, interior_rms;
+    uint64_t silhouette_pixels = 0;
+    std::optional<double> silhouette_rms;
 };
 
 // `image` against `reference` (the denominator's picture). mask: optional third picture

@@ -81,6 +81,29 @@ TEST(ImageCompare, CoverageAndNoise) {
     EXPECT_LT(rgb[9], 255);
 }
 
+TEST(ImageCompare, SilhouettePixelsAreTheOutline) {
+    // A 3 x 3 object in a 5 x 5 frame: its 8 outer pixels touch the background, the centre
+    // does not. 10 % off at one outline pixel and 30 % at the centre.
+    ComparedImage ref = Flat(5, 5, 1.f);
+    ref.coverage.assign(25, 0.f);
+    for (int y = 1; y <= 3; ++y)
+        for (int x = 1; x <= 3; ++x)
+            ref.coverage[size_t(y * 5 + x)] = 1.f;
+    ComparedImage im = Flat(5, 5, 1.f);
+    for (int c = 0; c < 3; ++c) {
+        im.rgb[3 * 6 + size_t(c)] = 1.1f;   // (1, 1): outline
+        im.rgb[3 * 12 + size_t(c)] = 1.3f;  // (2, 2): centre
+    }
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_EQ(d.pixels, 9u);
+    EXPECT_EQ(d.silhouette_pixels, 8u);
+    ASSERT_TRUE(d.silhouette_rms.has_value());
+    EXPECT_NEAR(*d.silhouette_rms, 0.1 / std::sqrt(8.0), 1e-6);
+    // Without a coverage channel every pixel counts: no outline to speak of.
+    ref.coverage.clear();
+    EXPECT_FALSE(CompareImages(im, ref, ToneMap{}).silhouette_rms.has_value());
+}
+
 TEST(ImageCompare, ChartBordersSplitTheRms) {
     // Charts 0 | 1 side by side: pixels 1 and 2 touch the border, 0 and 3 do not.
     ComparedImage ref = Flat(4, 1, 1.f);
