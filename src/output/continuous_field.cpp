@@ -47,8 +47,14 @@ void ContinuousField::Eval(double u, double v, float* out) const {
                          std::max(0.0, std::min(v1, hi_v) - std::max(v0, lo_v));
         if (w <= 0)
             continue;
-        // Node-local coordinates of (u, v), unclamped: the polynomial extended past its node.
-        const double s = u / node.size() - node.i, t = v / node.size() - node.j;
+        // Each leaf is evaluated at the point of its own node nearest to (u, v), never
+        // extrapolated past it: extending the fit of a small leaf (its linear terms as well
+        // as its quadratic ones) is where the blend went wrong on the scans' pictures
+        // (bench/RESULTS.md, issue 14 session 7). Still continuous (the nearest point moves
+        // continuously with (u, v)), and the shown value is a convex combination of values
+        // the leaves take on their own nodes, so it never overshoots them.
+        const double s = std::clamp(u / node.size() - node.i, 0.0, 1.0);
+        const double t = std::clamp(v / node.size() - node.j, 0.0, 1.0);
         solve::EvalCoeffs(field_.order(), field_.value(leaves[size_t(k)]), blocks, s, t, part);
         for (int b = 0; b < blocks; ++b)
             out[b] += float(w) * part[b];

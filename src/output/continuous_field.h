@@ -1,13 +1,16 @@
 // A chart's field as displayed: continuous (C0) across quadtree node borders, T-vertices
 // included. Each leaf's polynomial is fitted on its own, so neighbouring leaves disagree
 // along their shared edge (node_seams.h measures it). The reconstruction
-//   E(x) = sum over leaves L of |B(x) n L| / |B(x)| P_L(x)
-// with B(x) the square of half-width delta around x (clipped to the chart's square) and P_L
-// the leaf's polynomial, extended past its node where the box reaches over, has weights
-// that are continuous in x, so E is. Farther than delta from its border, a leaf shows its
-// own fit unchanged. delta is a constant per chart: half its smallest leaf (so a box meets
-// at most four leaves) and at most `max_delta`, about a light-map texel, so a polynomial is
-// used only just past its own node. At a border the value is the mean of the two sides.
+//   E(x) = sum over leaves L of |B(x) n L| / |B(x)| P_L(c_L(x))
+// with B(x) the square of half-width delta around x (clipped to the chart's square), P_L
+// the leaf's polynomial and c_L(x) the point of L's node nearest to x, has weights and
+// arguments that are continuous in x, so E is. A leaf is never extrapolated past its node,
+// so E is a convex combination of values the leaves take on their own nodes (no
+// overshoot); a field linear across leaves is reproduced to within (|dE/du| + |dE/dv|)
+// delta / 8. Farther than delta from its border, a leaf shows its own fit unchanged. delta
+// is a constant per chart: half its smallest leaf (so a box meets at most four leaves) and
+// at most `max_delta`, about a light-map texel. At a border the value is the mean of the
+// two sides.
 #pragma once
 
 #include "solve/field.h"
