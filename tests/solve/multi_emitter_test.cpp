@@ -219,6 +219,20 @@ TEST(MultiEmitter, BrightSecondLightWashesOutTheFirstsPenumbra) {
     CompareModes(8.0, 2e-3);
 }
 
+// One polygon light: nothing to merge, simplify is full (same bytes, no boundary pass).
+TEST(MultiEmitter, OneLightIsFull) {
+    Fig7 f(1.0);
+    f.scene.lights.pop_back();
+    Solver full(f.scene, f.charts, f.vis, Options(false, 1e-2));
+    full.Run();
+    Solver simple(f.scene, f.charts, f.vis, Options(true, 1e-2));
+    simple.Run();
+    const auto a = full.fields()[0].values(), b = simple.fields()[0].values();
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+    EXPECT_EQ(DirectRays(full), DirectRays(simple));
+}
+
 TEST(MultiEmitter, BitIdenticalForAnyThreadCount) {
     auto run = [](int threads) {
         ThreadLimit limit(threads);
