@@ -3,6 +3,7 @@
 
 #include "core/check.h"
 #include "solve/polygon_light.h"
+#include "stream/square_fit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -91,7 +92,9 @@ std::vector<std::array<int, 2>> Silhouette(const ConvexOccluder& o, const Vec3d&
 }
 
 bool SegmentsCross(const std::array<Vec2d, 2>& p, const std::array<Vec2d, 2>& q) {
-    auto side = [](const Vec2d& a, const Vec2d& b, const Vec2d& c) { return Cross(b - a, c - a); };
+    auto side = [](const Vec2d& a, const Vec2d& b, const Vec2d& c) {
+        return Cross(b - a, c - a);
+    };
     const double d1 = side(p[0], p[1], q[0]), d2 = side(p[0], p[1], q[1]);
     const double d3 = side(q[0], q[1], p[0]), d4 = side(q[0], q[1], p[1]);
     return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
@@ -109,27 +112,6 @@ std::vector<std::array<int, 2>> ConvexOccluder::Edges() const {
     std::sort(e.begin(), e.end());
     e.erase(std::unique(e.begin(), e.end()), e.end());
     return e;
-}
-
-std::vector<Vec2d> ConvexHull2D(std::vector<Vec2d> pts) {
-    std::sort(pts.begin(), pts.end(),
-              [](const Vec2d& a, const Vec2d& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
-    if (pts.size() < 3)
-        return pts;
-    std::vector<Vec2d> h(2 * pts.size());
-    size_t k = 0;
-    for (size_t i = 0; i < pts.size(); ++i) {  // lower hull (Andrew's monotone chain)
-        while (k >= 2 && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0)
-            --k;
-        h[k++] = pts[i];
-    }
-    for (size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {  // upper hull
-        while (k >= t && Cross(h[k - 1] - h[k - 2], pts[i] - h[k - 2]) <= 0)
-            --k;
-        h[k++] = pts[i];
-    }
-    h.resize(k - 1);
-    return h;
 }
 
 bool InsideConvex(std::span<const Vec2d> poly, const Vec2d& p) {
@@ -202,10 +184,10 @@ ExactExtremalBoundary::ExactExtremalBoundary(std::span<const Vec3d> light,
             for (const auto& o : occ.vertices)
                 proj.push_back(Project(plane, light[i], o));
             all.insert(all.end(), proj.begin(), proj.end());
-            const std::vector<Vec2d> hull = ConvexHull2D(proj);
+            const std::vector<Vec2d> hull = stream::ConvexHull(proj);
             umbra = i == 0 ? hull : IntersectConvex(umbra, hull);
         }
-        maximal_.push_back(ConvexHull2D(all));
+        maximal_.push_back(stream::ConvexHull(all));
         minimal_.push_back(umbra.size() >= 3 ? umbra : std::vector<Vec2d>{});
     }
 }

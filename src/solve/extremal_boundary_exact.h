@@ -7,11 +7,12 @@
 // separates the light from the occluder bounds the shadow; the shadow of one convex
 // occluder is the intersection of those half-spaces, a convex polygon on the receiver whose
 // corners are occluder vertices projected from light vertices, so it is built as the hull
-// of those projections (SeparatingWedgeShadow builds it from the wedges, as a check). Minimal boundary (umbra / penumbra) of one convex occluder: the intersection of
-// the occluder's shadows from each light vertex (its edges are EV events too). Where two
-// occluders together hide the light (EEE events) the umbra is not found: such points are
-// classified penumbra. Valid when every occluder lies strictly between the light's plane
-// and the receiver (touching the receiver is fine).
+// of those projections (SeparatingWedgeShadow builds it from the wedges, as a check). Minimal
+// boundary (umbra / penumbra) of one convex occluder: the intersection of the occluder's shadows
+// from each light vertex (its edges are EV events too). Where two occluders together hide the light
+// (EEE events) the umbra is not found: such points are classified penumbra. Valid when every
+// occluder lies strictly between the light's plane and the receiver (touching the receiver is
+// fine).
 #pragma once
 
 #include "core/vec.h"
@@ -74,8 +75,7 @@ DiscontinuityStructure CompleteDiscontinuities(std::span<const Vec3d> light,
                                                std::span<const ConvexOccluder> occluders,
                                                const ReceiverPlane& plane);
 
-// 2D helpers (counter-clockwise convex polygons).
-std::vector<Vec2d> ConvexHull2D(std::vector<Vec2d> points);
+// Whether p lies in (or on) the counter-clockwise convex polygon.
 bool InsideConvex(std::span<const Vec2d> poly, const Vec2d& p);
 
 }  // namespace mebake::solve

@@ -3,6 +3,7 @@
 
 #include "core/check.h"
 #include "solve/polygon_light.h"
+#include "stream/square_fit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +17,9 @@ double BackprojectedIrradiance(std::span<const Vec3d> light, const ConvexOcclude
     // wound counter-clockwise from its front is counter-clockwise in (e1, e2).
     const Vec3d ln = PolygonNormal(light);
     const Vec3d e1 = Normalize(light[1] - light[0]), e2 = Cross(ln, e1);
-    auto to2 = [&](const Vec3d& p) { return Vec2d{Dot(p - light[0], e1), Dot(p - light[0], e2)}; };
+    auto to2 = [&](const Vec3d& p) {
+        return Vec2d{Dot(p - light[0], e1), Dot(p - light[0], e2)};
+    };
     std::vector<Vec2d> lp, shadow;
     for (const auto& v : light)
         lp.push_back(to2(v));
@@ -28,7 +31,7 @@ double BackprojectedIrradiance(std::span<const Vec3d> light, const ConvexOcclude
         shadow.push_back(to2(x + (o - x) * (hx / std::max(hx - ho, 1e-7 * hx))));
     }
     // Hidden part of the light: the light intersected with the occluder's projection.
-    std::vector<Vec2d> hidden = ConvexHull2D(shadow);
+    std::vector<Vec2d> hidden = stream::ConvexHull(shadow);
     for (size_t k = 0; k < lp.size() && hidden.size() >= 3; ++k) {
         const Vec2d a = lp[k], b = lp[(k + 1) % lp.size()];
         std::vector<Vec2d> out;

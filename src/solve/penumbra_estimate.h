@@ -22,7 +22,7 @@ double BackprojectedIrradiance(std::span<const Vec3d> light, const ConvexOcclude
                                const Vec3d& x, const Vec3d& n);
 
 struct PenumbraEstimate {
-    bool ok = false;  // false: no minimal boundary (no umbra) to start from
+    bool ok = false;                 // false: no minimal boundary (no umbra) to start from
     double hermite = 0, linear = 0;  // the cubic's value and the straight line's (0 -> unoccluded)
 };
 

@@ -85,7 +85,8 @@ bool Blocks(const Planes& o, const Vec3d& x, const Vec3d& l) {
         const Vec3d p = x + (l - x) * (a / (a - b));
         int sign = 0;
         for (size_t k = 0; k < o.loop.size(); ++k) {
-            const double c = Dot(Cross(o.loop[(k + 1) % o.loop.size()] - o.loop[k], p - o.loop[k]), n);
+            const double c =
+                Dot(Cross(o.loop[(k + 1) % o.loop.size()] - o.loop[k], p - o.loop[k]), n);
             const int sk = c > 0 ? 1 : -1;
             if (sign != 0 && sk != sign)
                 return false;
@@ -157,7 +158,10 @@ Analytic Fig7Scene() {
     return {"Fig. 7 box",
             {Rect(-0.6, 2, 0, 0.5), Rect(0.9, 2, 0, 0.5)},
             {Polygon(Rect(0, 1, 0, 0.4))},
-            -3, 3, -3, 3};
+            -3,
+            3,
+            -3,
+            3};
 }
 
 Analytic TiltedScene() {
@@ -170,8 +174,13 @@ Analytic TiltedScene() {
         const Vec3d p(a, b * st, b * ct);  // tilt about x
         sq.push_back({c * p.x + s * p.z, 1 + p.y, -s * p.x + c * p.z});
     }
-    return {"tilted square", {{{-0.5, 2.2, -0.4}, {0.6, 2.2, -0.3}, {0.1, 2.2, 0.6}}},
-            {Polygon(sq)}, -3, 3, -3, 3};
+    return {"tilted square",
+            {{{-0.5, 2.2, -0.4}, {0.6, 2.2, -0.3}, {0.1, 2.2, 0.6}}},
+            {Polygon(sq)},
+            -3,
+            3,
+            -3,
+            3};
 }
 
 Analytic CornellScene() {
@@ -272,24 +281,33 @@ TEST(ExactExtremalBoundary, AgreesWithBruteForceVisibility) {
     }
 }
 
-// The solver's sampled pass (3 x 3 samples per node, classification rays) against the exact
-// classes on the tilted scene: the area of lit and umbra regions holding points of another
-// exact class.
-TEST(ExactExtremalBoundary, SampledPassAgainstTheExactReference) {
-    const Analytic sc = TiltedScene();
+// The solver's sampled pass (3 x 3 samples per node, classification rays, levels 3-7) for
+// one light against the exact classes, on the 6 x 6 floor: the area of each region class
+// and the area of lit and umbra regions holding points (7 x 7 per region) of another exact
+// class, all of it and the part that is lit in umbra or umbra in lit.
+struct SampledCheck {
+    double area[5] = {}, wrong = 0, gross = 0;
+};
+SampledCheck SampledAgainstExact(const Analytic& sc, size_t light) {
     Scene scene;
     PolygonLight pl;
-    pl.vertices = sc.lights[0];
+    pl.vertices = sc.lights[light];
     pl.radiance = {1, 1, 1};
     scene.lights.push_back(pl);
     VisibilityScene vis;
-    std::vector<float> xyz;
-    for (const auto& v : sc.occluders[0].vertices)
-        xyz.insert(xyz.end(), {float(v.x), float(v.y), float(v.z)});
-    vis.AddTriangles(xyz, std::vector<uint32_t>{0, 1, 2, 0, 2, 3}, "occluder");
+    for (const auto& o : sc.occluders) {
+        std::vector<float> xyz;
+        std::vector<uint32_t> tris;
+        for (const auto& v : o.vertices)
+            xyz.insert(xyz.end(), {float(v.x), float(v.y), float(v.z)});
+        for (const auto& f : o.faces)
+            for (size_t k = 1; k + 1 < f.size(); ++k)
+                tris.insert(tris.end(), {uint32_t(f[0]), uint32_t(f[k]), uint32_t(f[k + 1])});
+        vis.AddTriangles(xyz, tris, "occluder");
+    }
     vis.Commit();
     DirectLight direct(scene, SolverSettings{}, vis, 1e-5f, 8.5f);
-    const ExactExtremalBoundary exact(sc.lights[0], sc.occluders, kFloor);
+    const ExactExtremalBoundary exact(sc.lights[light], sc.occluders, kFloor);
     const ExtremalBoundaries sampled(
         direct,
         [](float u, float v) {
@@ -297,33 +315,48 @@ TEST(ExactExtremalBoundary, SampledPassAgainstTheExactReference) {
             return ReceiverPoint{p, n, p, n};
         },
         3, 7);
-    double wrong = 0, gross = 0, area[5] = {};
+    SampledCheck c;
     for (const auto& r : sampled.regions(0)) {
         const double size = 1.0 / double(1u << r.level);
-        area[r.cls] += size * size;
+        c.area[r.cls] += size * size;
         if (r.cls == ExtremalBoundaries::kPenumbra)
             continue;
         for (int b = 0; b < 7; ++b)
             for (int a = 0; a < 7; ++a) {
                 const double u = (r.i + (a + 0.5) / 7) * size, v = (r.j + (b + 0.5) / 7) * size;
-                const auto c = exact.Classify({6 * u - 3, 6 * v - 3});
-                if (c != r.cls)
-                    wrong += size * size / 49;
-                if (c != r.cls && c != ExtremalBoundaries::kPenumbra)
-                    gross += size * size / 49;  // lit in umbra or umbra in lit
+                const auto e = exact.Classify({6 * u - 3, 6 * v - 3});
+                if (e != r.cls)
+                    c.wrong += size * size / 49;
+                if (e != r.cls && e != ExtremalBoundaries::kPenumbra)
+                    c.gross += size * size / 49;
             }
     }
+    return c;
+}
+
+TEST(ExactExtremalBoundary, SampledPassAgainstTheExactReference) {
+    // Fig. 7: the shadow is larger than the sampling step; the classes hold everywhere.
+    const Analytic fig7 = Fig7Scene();
+    for (size_t l = 0; l < 2; ++l) {
+        const SampledCheck c = SampledAgainstExact(fig7, l);
+        EXPECT_NEAR(c.area[2] + c.area[3] + c.area[4], 1.0, 1e-9);
+        EXPECT_GT(c.area[2], 0.8) << "light " << l;
+        EXPECT_GT(c.area[4], 0.0) << "light " << l;
+        EXPECT_LT(c.wrong, 1e-4) << "light " << l;
+    }
+    // The tilted square under a triangle light.
+    const SampledCheck c = SampledAgainstExact(TiltedScene(), 0);
     std::printf("sampled pass vs exact EV boundary (tilted square): lit %.4f, umbra %.4f, "
                 "penumbra %.4f of the chart; penumbra inside lit or umbra regions %.2e, lit "
                 "inside umbra or umbra inside lit %.2e\n",
-                area[2], area[3], area[4], wrong - gross, gross);
-    EXPECT_GT(area[3], 0.0);
-    EXPECT_EQ(gross, 0.0);
+                c.area[2], c.area[3], c.area[4], c.wrong - c.gross, c.gross);
+    EXPECT_GT(c.area[3], 0.0);
+    EXPECT_EQ(c.gross, 0.0);
     // The classification rays see the light's vertices and centre only: where the occluder
     // hides a sliver of the light between them the point is called lit (docs/method.md;
     // measured 1.3e-2 of the chart, a tenth of the penumbra).
-    EXPECT_GT(wrong, 0.0);
-    EXPECT_LT(wrong, 0.25 * area[4]);
+    EXPECT_GT(c.wrong, 0.0);
+    EXPECT_LT(c.wrong, 0.25 * c.area[4]);
 }
 
 // The shape of the paper's Table 1: time of the extremal boundary (maximal and minimal
@@ -429,13 +462,18 @@ TEST(PenumbraEstimate, HermiteAgainstTheExactValue) {
 // the combined light (light 0 at its estimate or its exact value, plus light 1 at
 // `second` times, exact) at the 4 x 4 Gauss points, the biquadratic projection kept when it
 // misses no point by more than the tolerance x the largest value (refine_direct.cpp's
-// test), at the solver's tolerance 0.02 and at 0.002. Counts the nodes the estimate keeps though the exact values would split them.
+// test), at the solver's tolerance 0.02 and at 0.002. Counts the nodes the estimate keeps though
+// the exact values would split them.
 TEST(PenumbraEstimate, AsTheLightPenumbraTestsMediumValues) {
     const Analytic sc = Fig7Scene();
     const Vec3d up(0, 1, 0);
     const ExactExtremalBoundary eb(sc.lights[0], sc.occluders, kFloor);
-    for (auto [second, n, tol] : {std::tuple{1.0, 8, 0.02f}, {1.0, 16, 0.002f}, {1.0, 32, 0.002f},
-                                  {8.0, 8, 0.02f}, {8.0, 16, 0.002f}, {8.0, 32, 0.002f}}) {
+    for (auto [second, n, tol] : {std::tuple{1.0, 8, 0.02f},
+                                  {1.0, 16, 0.002f},
+                                  {1.0, 32, 0.002f},
+                                  {8.0, 8, 0.02f},
+                                  {8.0, 16, 0.002f},
+                                  {8.0, 32, 0.002f}}) {
         int nodes = 0, agree = 0, false_keep = 0, false_split = 0, kept = 0;
         const int g = 4;
         for (int j = 0; j < n; ++j)
@@ -453,7 +491,8 @@ TEST(PenumbraEstimate, AsTheLightPenumbraTestsMediumValues) {
                     double v0 = e0;
                     if (c == ExtremalBoundaries::kPenumbra) {
                         pen = true;
-                        v0 = EstimatePenumbra(eb, 0, sc.lights[0], sc.occluders[0], kFloor, st).hermite;
+                        v0 = EstimatePenumbra(eb, 0, sc.lights[0], sc.occluders[0], kFloor, st)
+                                 .hermite;
                     }
                     exact[p] = float(e0 + other);
                     est[p] = float(v0 + other);
