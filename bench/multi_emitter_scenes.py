@@ -3,7 +3,8 @@
 lights on a ring, and McGuire's Cornell box with its lamp off and N ceiling lights.
 Usage: multi_emitter_scenes.py OUTDIR [NAME=BAKE_DIR ...] [--veach VEACH_MIS_XML]
 writes bunnyN.json, cornellN.json (direct light only) and bunnyNb.json, cornellNb.json
-(with the default bounces) for N = 1, 2, 4, 8; for each NAME=BAKE_DIR (an ingested scan) also
+(with the default bounces) for N = 1, 2, 4, 8, and rigN(b).json: the bunny's N lights added
+to the default rig; for each NAME=BAKE_DIR (an ingested scan) also
 NAMEN.json and NAMENb.json: the bunny's ring scaled to the scan's bounding box (manifest.json);
 with --veach also veach5.json / veach5b.json: the five sphere lights of Veach's plates scene
 (Mitsuba XML) as octagons of the same area facing the plates (all surfaces albedo 0.4)."""
@@ -90,6 +91,9 @@ def main(out, scans):
         lights = ring([-0.017, 0.11, -0.002], 0.25, n)
         write(out, f"bunny{n}", {"materials": [{"albedo": 0.7}], "lights": lights,
                                  "sky": {"type": "none"}, "default_rig": False})
+        # The same lights added to the default rig (its sky and key light).
+        write(out, f"rig{n}", {"materials": [{"albedo": 0.7}], "lights": lights,
+                               "default_rig": True})
     for arg in scans:
         name, bake = arg.split("=", 1)
         lo, hi = json.load(open(os.path.join(bake, "manifest.json")))["bbox"]

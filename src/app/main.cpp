@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
     sol_cmd->add_option("--multi-emitter", sol.multi_emitter,
                         "Direct light of several polygon lights: full (every light traced everywhere) "
                         "or simplify (extremal boundaries + L2 simplification, seed 002); default: "
-                        "the scene file's solver.multi_emitter, else full")
+                        "the scene file's solver.multi_emitter, else simplify")
         ->check(CLI::IsMember({"full", "simplify"}));
     sol_cmd->add_option("--multi-emitter-debug", sol.multi_emitter_debug,
                         "With --multi-emitter simplify: write DIR/chart-N.png per chart, each "

@@ -69,6 +69,8 @@ Rgb TestColour(const std::unordered_map<size_t, NodeTest>& tests, size_t n) {
         return {90, 190, 90};
     case NodeTest::kLightPenumbra:
         return {240, 150, 40};
+    case NodeTest::kSingle:
+        return {70, 120, 220};
     default:
         return {200, 50, 50};
     }

@@ -18,7 +18,7 @@ enum class NodeTest : uint8_t {
     kCap,            // at the depth cap: fitted, not tested
     kLightLight,     // every light lit or in umbra: closed form, L2 test
     kLightPenumbra,  // some light in penumbra: sampled, residual test
-    kSingle,         // one light reaches it, in penumbra: control grid as in full
+    kSingle,         // at most one light reaches it: control grid as in full
 };
 
 // Writes `path` (PNG): one panel per light (lit yellow, umbra dark blue, penumbra red,

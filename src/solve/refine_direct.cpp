@@ -49,12 +49,13 @@ float MaxAbs(const std::vector<float>& v) {
 // points are its probes (visibility shared across the node, DirectLight::Evaluate).
 class Solver::DirectSampler {
 public:
+    // control_grid: points per side of the control grid (0: order + 2; 2: the corners).
     DirectSampler(const Solver& solver, const SolveChart& sc, int order, int max_level,
-                  DirectLight& direct)
+                  DirectLight& direct, int control_grid = 0)
         : solver_(solver),
           sc_(sc),
           ng_(order + 1),
-          gc_(order + 2),
+          gc_(control_grid > 0 ? control_grid : order + 2),
           finest_(sc.geometry.finest_level()),
           max_level_(max_level),
           direct_(direct) {}
@@ -212,7 +213,9 @@ void Solver::RefineDirect(uint32_t chart) {
 
     DirectSampler sampler(*this, sc, order, max_level, direct);
     const double cpu_start = ThreadCpuSeconds();
-    if (opt_.settings.multi_emitter_simplify && direct.has_lights()) {
+    // With one polygon light there is nothing to merge (seed 002 simplifies where several
+    // sources overlap): simplify is full, without the boundary pass.
+    if (opt_.settings.multi_emitter_simplify && direct.light_count() >= 2) {
         // Extremal boundaries first (a few rays per sample): they choose each node's test
         // (multi_emitter.h). A node's samples are still traced, so a shadow the pass
         // missed between its samples shows wherever a node's sample falls in it.
@@ -227,7 +230,8 @@ void Solver::RefineDirect(uint32_t chart) {
             std::min(max_level, min_level + 1),
             std::max(min_level + 1, max_level - kBoundaryLevelsAboveCap));
         const double cpu_boundary = ThreadCpuSeconds() - cpu_start;
-        DirectSampler fine(*this, sc, std::min(order + 2, kMaxGauss - 1), max_level, direct);
+        DirectSampler fine(*this, sc, std::min(order + 2, kMaxGauss - 1), max_level, direct,
+                           order + 2);
         fine.use_probes = false;
         DirectSampler medium(*this, sc, std::min(order + 1, kMaxGauss - 1), max_level, direct);
         SimplifiedFit simplified{eb, fine, medium, chart};
@@ -254,10 +258,11 @@ void Solver::RefineDirect(uint32_t chart) {
 }
 
 // One node under --multi-emitter simplify (seed 002, section 5): its fit into coeffs, and
-// the error to refine it by (0: keep it). Light-light (every light lit or in umbra by the
-// extremal boundaries): the fit at the (M+1)^2 Gauss points is tested in L2 by the (M+3)^2
-// rule against the lights' closed form (no ray), which also catches a shadow the boundary
-// pass missed. Light-penumbra (some light in penumbra, two or more reaching): the combined
+// the error to refine it by (0: keep it). At most one light reaching the node: as in full.
+// Light-light (every light lit or in umbra by the extremal boundaries): the fit at the
+// (M+1)^2 Gauss points is tested in L2 by the (M+3)^2 rule and at full's control grid
+// against the lights' closed form (no ray), which also catches a shadow the boundary pass
+// missed. Light-penumbra (some light in penumbra, two or more reaching): the combined
 // light at (M+2)^2 Gauss points, the node's polynomial its L2 projection (the simple
 // biquadratic at M2), kept when it misses no sample by more than the tolerance. Both
 // tests are relative to the combined light's largest value over the node, so one light's
@@ -270,24 +275,12 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
     sf.eb.Known(node, &sf.known);
     const bool all_known =
         std::find(sf.known.begin(), sf.known.end(), uint8_t(0)) == sf.known.end();
-    if (!control || all_known) {
-        sampler.Evaluate(node, false);
-        ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
-        sf.last = control ? NodeTest::kLightLight : NodeTest::kCap;
-        if (!control)
-            return 0;
-        ++sf.closed;
-        sf.fine.known = sf.known;
-        sf.fine.Evaluate(node, false);
-        const float err = GaussL2Error(order, sf.fine.order() + 1, coeffs.data(), blocks,
-                                       sf.fine.gauss_vals.data());
-        const float scale =
-            std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sf.fine.gauss_vals), floor});
-        return err > tol * scale ? err : 0;
-    }
-    // One light reaching the node, in penumbra: nothing washes its shadow out, so the node
-    // is tested as in full (the control grid, max norm).
-    if (std::count_if(sf.known.begin(), sf.known.end(), [](uint8_t k) { return k != 3; }) <= 1) {
+    const auto reaching =
+        std::count_if(sf.known.begin(), sf.known.end(), [](uint8_t k) { return k != 3; });
+    if (control && reaching <= 1) {
+        // One light reaching the node (lit or in penumbra): nothing washes its shadow out and
+        // there is no second source to merge with, so the node is tested as in full (the
+        // control grid, max norm; the same rays and values as full).
         ++sf.single;
         sf.last = NodeTest::kSingle;
         sampler.Evaluate(node, true);
@@ -296,6 +289,26 @@ float Solver::SimplifiedNode(const QuadNode& node, bool control, DirectSampler& 
             std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
         const float err =
             ControlGridError(order, order + 2, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        return err > tol * scale ? err : 0;
+    }
+    if (!control || all_known) {
+        sampler.Evaluate(node, false);
+        ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
+        sf.last = control ? NodeTest::kLightLight : NodeTest::kCap;
+        if (!control)
+            return 0;
+        ++sf.closed;
+        sf.fine.known = sf.known;
+        sf.fine.Evaluate(node, true);
+        // In L2 by the (M+3)^2 rule, and at full's control grid (its edges and corners,
+        // where an L2 norm hides an overshoot: Veach's plates, bench/RESULTS.md, "Issue 15
+        // (session 7)"), both against the closed form.
+        const float err = std::max(
+            GaussL2Error(order, sf.fine.order() + 1, coeffs.data(), blocks,
+                         sf.fine.gauss_vals.data()),
+            ControlGridError(order, order + 2, coeffs.data(), blocks, sf.fine.ctrl_vals.data()));
+        const float scale = std::max({MaxAbs(sampler.gauss_vals), MaxAbs(sf.fine.gauss_vals),
+                                      MaxAbs(sf.fine.ctrl_vals), floor});
         return err > tol * scale ? err : 0;
     }
     sf.last = NodeTest::kLightPenumbra;

@@ -157,7 +157,8 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->cluster_links = s.value("cluster_links", o->cluster_links);
     o->link_tolerance = s.value("link_tolerance", o->link_tolerance);
     if (o->order < 0 || o->order > 3) InputError({scene_file}, "solver.order must be 0..3");
-    const std::string multi = s.value("multi_emitter", std::string("full"));
+    const std::string multi =
+        s.value("multi_emitter", std::string(o->multi_emitter_simplify ? "simplify" : "full"));
     if (multi != "full" && multi != "simplify")
         InputError({scene_file}, "solver.multi_emitter '{}': expected full or simplify", multi);
     o->multi_emitter_simplify = multi == "simplify";

@@ -52,8 +52,9 @@ struct SolverSettings {
     int light_samples = 64;       // visibility samples per receiver point in penumbrae
     bool radiosity = false;       // solve for B instead of E (for comparison, seed Table 1)
     // Direct light from several polygon lights: false = every light traced at every point
-    // (full), true = extremal boundaries and the L2 simplification of seed 002 (simplify).
-    bool multi_emitter_simplify = false;
+    // (full), true = extremal boundaries and the L2 simplification of seed 002 (simplify,
+    // the default: the same as full with one light; docs/method.md, "Several sources").
+    bool multi_emitter_simplify = true;
     bool cluster_links = true;    // far receivers through cluster links (cluster_links.cpp)
     double link_tolerance = 1;    // error-driven link refinement (link_refine.h); 0: off
 };
