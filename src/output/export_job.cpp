@@ -199,8 +199,9 @@ void RunExportJob(const ExportJobOptions& c) {
 void RunRenderJob(const RenderJobOptions& c) {
     const auto t0 = Clock::now();
     CheckFresh(c.output, c.force);
-    BakeView view =
-        OpenBakeView(c.dir, FieldLoading::All, c.stitch ? SeamStitching::On : SeamStitching::Off);
+    // Fields are read a chart at a time while the hit samples are shaded (render.h).
+    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand,
+                                 c.stitch ? SeamStitching::On : SeamStitching::Off);
     RenderOptions ro;
     ro.camera = DefaultCamera(view, c.width, c.height, c.fov);
     if (c.eye)
