@@ -50,6 +50,11 @@ public:
     // clear error instead of exceeding the budget.
     uint64_t EmbreeLimit() const;
 
+    // Export: the page cache of each of the vertex colours' disk arrays (the running sums
+    // per input vertex are looked up tile by tile). More buys little: evicted pages are
+    // read back from the kernel's page cache.
+    uint64_t ExportCache() const;
+
     std::vector<MemoryShare> Shares() const;
 
 private:
