@@ -56,7 +56,7 @@ downstream() {
   mkdir -p "$o"
   measure "$name" solve "$b" "$MEBAKE" solve "$d" --memory "$b" --force || return 1
   measure "$name" export "$b" "$MEBAKE" export "$d" --lightmap "$o/lightmap.exr" \
-    --mesh "$o/baked.glb" --vertex-colors "$o/vertex_colors.ply" --force || return 1
+    --mesh "$o/baked.glb" --vertex-colors "$o/vertex_colors.ply" --memory "$b" --force || return 1
   measure "$name" render "$b" "$MEBAKE" render "$d" -o "$o/render.png" --force || return 1
   cp "$d/solve/solution.bin" "$o/solution.bin"
 }
