@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
 # Peak RSS per stage under a small budget (issue 16): every shared scan (and optional
 # generated sizes) ingested and solved with --memory M, then exported (light map, glTF,
-# vertex colours) and rendered, each stage under /usr/bin/time -v; the solve, export and
-# render run again on a copy of the same ingested directory with --memory BIG and their
-# outputs are compared byte for byte.
+# vertex colours) and rendered, each stage under /usr/bin/time -v; the whole bake (ingest
+# included) runs again with --memory BIG and the outputs are compared byte for byte.
 #
 #   bash bench/memory256.sh [--memory 256M] [--big 4G] [--scans "bun_zipper.ply ..."]
 #                           [--generated "1000000 ..."] [--work DIR] [--no-compare]
@@ -57,7 +56,7 @@ downstream() {
   mkdir -p "$o"
   measure "$name" solve "$b" "$MEBAKE" solve "$d" --memory "$b" --force || return 1
   measure "$name" export "$b" "$MEBAKE" export "$d" --lightmap "$o/lightmap.exr" \
-    --mesh "$o/baked.glb" --vertex-colors "$o/vertex_colors.ply" --force || return 1
+    --mesh "$o/baked.glb" --vertex-colors "$o/vertex_colors.ply" --memory "$b" --force || return 1
   measure "$name" render "$b" "$MEBAKE" render "$d" -o "$o/render.png" --force || return 1
   cp "$d/solve/solution.bin" "$o/solution.bin"
 }
@@ -69,6 +68,8 @@ one() {  # one NAME INGEST-CMD...
   measure "$name" ingest "$SMALL" "$@" -o "$d" --memory "$SMALL" --force || return 0
   downstream "$name" "$d" "$SMALL" "$WORK/$name.small" || return 0
   if [ "$COMPARE" = 1 ]; then
+    rm -rf "$d"
+    measure "$name" ingest "$BIG" "$@" -o "$d" --memory "$BIG" --force || return 0
     downstream "$name" "$d" "$BIG" "$WORK/$name.big" || return 0
     local same=identical
     for f in solution.bin lightmap.exr baked.glb vertex_colors.ply render.png; do

@@ -2,6 +2,7 @@
 // parsing, then one call into the libraries (stream/ingest_job.h, solve/solve_job.h,
 // output/bake_job.h).
 #include "app/commands.h"
+#include "app/export_commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/memory_budget.h"
@@ -21,7 +22,6 @@
 
 namespace mebake::app {
 
-namespace {
 uint64_t ParseMemory(const std::string& text) {
     auto bytes = ParseByteSize(text);
     if (!bytes)
@@ -30,6 +30,8 @@ uint64_t ParseMemory(const std::string& text) {
         UsageError("--memory {}: at least 64M is needed", text);
     return *bytes;
 }
+
+namespace {
 
 // --up: an axis name, or detected when not given.
 std::optional<Vec3d> UpOption(const std::string& name) {

@@ -59,6 +59,7 @@ int RunExport(const ExportCommand& c) {
     o.float_colors = c.float_output;
     o.stitch = !c.no_stitch;
     o.force = c.force;
+    o.memory = ParseMemory(c.memory);
     output::RunExportJob(o);
     return 0;
 }

@@ -15,6 +15,9 @@ namespace mebake::app {
 // (render, export's views and the reference picture share the camera options).
 Vec3d ToVec3(const std::vector<double>& v, const char* option);
 
+// --memory: a size such as 512M or 2G, at least 64M (usage error otherwise).
+uint64_t ParseMemory(const std::string& text);
+
 struct ExportCommand {
     std::string dir;            // solved bake directory
     std::string lightmap;       // .exr (linear B) or .png (tone-mapped); pages get UDIM numbers
@@ -33,6 +36,7 @@ struct ExportCommand {
     int threads = 0;
     bool force = false;      // overwrite existing outputs
     bool no_stitch = false;  // each chart's own field at chart borders
+    std::string memory = "1G";  // the budget
 };
 int RunExport(const ExportCommand& c);
 

@@ -242,6 +242,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"zip", "piz", "none"}));
     exp_cmd->add_flag("--unlit", exp.unlit, ".glb: KHR_materials_unlit base colour instead of an emissive light map");
     exp_cmd->add_option("--threads", exp.threads, "Worker threads (0: all cores)")->capture_default_str();
+    exp_cmd->add_option("--memory", exp.memory, "Memory budget (e.g. 512M, 2G)")->capture_default_str();
     exp_cmd->add_flag("--no-stitch", exp.no_stitch, "Show each chart's own field at chart borders (no stitching; to compare)");
     exp_cmd->add_flag("-f,--force", exp.force, "Overwrite existing output files");
     std::string exp_web;

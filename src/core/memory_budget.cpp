@@ -20,10 +20,6 @@ uint64_t MemoryBudget::Bricks() const {
     return total_;
 }
 
-uint64_t MemoryBudget::Visibility() const {
-    return total_ / 16;
-}
-
 uint64_t MemoryBudget::GeometryPyramids() const {
     return total_ / 32;
 }
@@ -33,17 +29,22 @@ uint64_t MemoryBudget::CoefficientPools() const {
 }
 
 uint64_t MemoryBudget::EmbreeLimit() const {
-    return 2 * Visibility();
+    return std::min(2 * Visibility(), total_ / 2);
+}
+
+uint64_t MemoryBudget::ExportCache() const {
+    return std::min<uint64_t>(total_ / 16, 64 * kMiB);
 }
 
 std::vector<MemoryShare> MemoryBudget::Shares() const {
     return {{"ingest.spill_cache", SpillCache(), "min(1/8, 12 MiB)"},
             {"ingest.binning_cache", BinningCache(), "min(1/8, 64 MiB, 4x spilled data)"},
-            {"ingest.bricks", Bricks(), "all (two bricks in flight, 2000 B per triangle)"},
-            {"solve.visibility", Visibility(), "1/16 (Embree scene, sized at ingest)"},
-            {"solve.embree_limit", EmbreeLimit(), "2x visibility (hard cap)"},
+            {"ingest.bricks", Bricks(), "all (bricks in flight: 2 if two fit at 400 B per triangle, else 1)"},
+            {"solve.visibility", Visibility(), "64 MiB whatever the budget (Embree scene, sized at ingest)"},
+            {"solve.embree_limit", EmbreeLimit(), "min(2x visibility, 1/2) (hard cap)"},
             {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"},
-            {"solve.coefficient_pools", CoefficientPools(), "1/16 beyond pinned charts"}};
+            {"solve.coefficient_pools", CoefficientPools(), "1/16 beyond pinned charts"},
+            {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"}};
 }
 
 }  // namespace mebake

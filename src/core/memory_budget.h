@@ -29,20 +29,31 @@ public:
     // caps it at a few times the spilled data, so small meshes take little).
     uint64_t BinningCache() const;
     // Ingest pass 3: the bricks in core (repair, charts, parameterization). Pass 3 runs
-    // alone, so it may take the whole budget; the brick size follows from it.
+    // alone, so it may take the whole budget; how many bricks are in flight follows from
+    // it (their size does not: it decides the charts, so it is fixed).
     uint64_t Bricks() const;
-    // Solve: the Embree scene of the visibility mesh (the full mesh, or a clustered proxy
-    // sized to fit this share at ingest).
-    uint64_t Visibility() const;
+    // The Embree scene of the visibility mesh (the full mesh, or a clustered proxy made at
+    // ingest to fit it). Fixed, not a fraction: the proxy decides what the solve sees, so a
+    // size that followed --memory would make every output depend on the budget. 64 MiB:
+    // the full mesh up to 1.2M triangles, else a proxy of 670K (the default 1G's share of
+    // before); it fits any budget from 256M up beside the solve's other shares.
+    static constexpr uint64_t kVisibilityBytes = uint64_t(64) << 20;
+    uint64_t Visibility() const { return kVisibilityBytes; }
     // Solve: the geometry pyramids resident beyond the charts pinned by the threads.
     uint64_t GeometryPyramids() const;
     // Solve: the coefficient pools (quadtree nodes, value and unshot per chart) resident
     // beyond the fields pinned by the threads and the emitters being built.
     uint64_t CoefficientPools() const;
-    // Solve: a hard cap on Embree's own allocations (its memory monitor). Twice the
-    // visibility share: the share sizes the scene, the cap catches a scene far off it
-    // (built for a larger budget) with a clear error instead of swapping.
+    // Solve: a hard cap on Embree's own allocations (its memory monitor): twice the
+    // visibility share (the share sizes the scene; the cap allows for Embree's build
+    // peak), at most half the budget, so under 256M a large visibility mesh fails with a
+    // clear error instead of exceeding the budget.
     uint64_t EmbreeLimit() const;
+
+    // Export: the page cache of each of the vertex colours' disk arrays (the running sums
+    // per input vertex are looked up tile by tile). More buys little: evicted pages are
+    // read back from the kernel's page cache.
+    uint64_t ExportCache() const;
 
     std::vector<MemoryShare> Shares() const;
 

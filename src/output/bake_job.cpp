@@ -76,9 +76,10 @@ void Solve(const BakeJobOptions& c, const std::string& dir) {
 }
 
 // The light map (EXR and PNG), the lit glTF, vertex colours, statistics and a render.
-void WriteOutputs(const std::string& dir, const std::string& out_dir) {
+void WriteOutputs(const std::string& dir, const std::string& out_dir, uint64_t memory) {
     ExportJobOptions exp;
     exp.dir = dir;
+    exp.memory = memory;
     exp.force = true;
     exp.tone_curve = "filmic";
     exp.lightmap = out_dir + "/lightmap.exr";
@@ -130,11 +131,12 @@ void RunBakeJob(const BakeJobOptions& c) {
         exp.force = true;
         exp.tone_curve = "filmic";
         exp.vertex_colors = "-";
+        exp.memory = c.memory;
         RunExportJob(exp);
         fs::remove_all(out_dir);
         return;
     }
-    WriteOutputs(ing.out_dir, out_dir);
+    WriteOutputs(ing.out_dir, out_dir, c.memory);
     spdlog::info("baked: {0}/lightmap.exr (and .png), {0}/baked.glb, {0}/vertex_colors.ply, "
                  "{0}/render.png",
                  out_dir);

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/units.h"
@@ -171,6 +172,7 @@ void RunExportJob(const ExportJobOptions& c) {
         VertexColorOptions vo;
         vo.tone = c.maps.tone;
         vo.float_colors = c.float_colors;
+        vo.cache_bytes = size_t(MemoryBudget(c.memory).ExportCache());
         const auto st = WriteVertexColors(view, c.vertex_colors, vo);
         seconds["vertex_colors"] = Since(t);
         progress.Add(view.chart_count());
@@ -199,8 +201,9 @@ void RunExportJob(const ExportJobOptions& c) {
 void RunRenderJob(const RenderJobOptions& c) {
     const auto t0 = Clock::now();
     CheckFresh(c.output, c.force);
-    BakeView view =
-        OpenBakeView(c.dir, FieldLoading::All, c.stitch ? SeamStitching::On : SeamStitching::Off);
+    // Fields are read a chart at a time while the hit samples are shaded (render.h).
+    BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand,
+                                 c.stitch ? SeamStitching::On : SeamStitching::Off);
     RenderOptions ro;
     ro.camera = DefaultCamera(view, c.width, c.height, c.fov);
     if (c.eye)

@@ -92,44 +92,159 @@ Camera DefaultCamera(const BakeView& view, int width, int height, double fov) {
     return cam;
 }
 
+namespace {
+
+// A camera sample's closest hit so far: the chart (kNoHit: none yet), its triangle and
+// barycentrics, and whether the ray meets the triangle's back.
+struct SampleHit {
+    float t = INFINITY;
+    float u = 0, v = 0;
+    uint32_t chart = solve::kNoHit, prim = 0;
+    bool back = false;
+};
+
+// Runs of consecutive charts with at most `max_triangles` triangles in all (a larger chart
+// alone), in chart order: each becomes one Embree scene in turn.
+std::vector<std::pair<uint32_t, uint32_t>> ChartGroups(const stream::Manifest& m,
+                                                       uint64_t max_triangles) {
+    std::vector<std::pair<uint32_t, uint32_t>> groups;
+    uint64_t in_group = 0;
+    for (uint32_t c = 0; c < m.charts.size(); ++c) {
+        const uint64_t n = m.charts[c].triangles;
+        if (groups.empty() || (in_group + n > max_triangles && in_group > 0)) {
+            groups.push_back({c, c});
+            in_group = 0;
+        }
+        groups.back().second = c + 1;
+        in_group += n;
+    }
+    return groups;
+}
+
+// Pass 1 for rows [y0, y1): every sample's closest hit over the charts of `group`, traced
+// against one Embree scene of that group; a hit replaces the one found in earlier groups
+// only when it is nearer (a tie keeps the earlier: the lower chart id).
+void TraceGroup(const BakeView& view, std::pair<uint32_t, uint32_t> group,
+                const PinholeRays& rays, const Camera& cam, int k, int y0, int y1,
+                std::vector<SampleHit>* hits) {
+    solve::VisibilityScene vis;
+    std::vector<uint32_t> geom_chart;
+    std::vector<uint32_t> charts(group.second - group.first);
+    for (uint32_t c = group.first; c < group.second; ++c)
+        charts[c - group.first] = c;
+    std::vector<float> xyz;
+    std::vector<uint32_t> idx;
+    // Tiles read in parallel batches, added in chart order (the geometry ids are the same
+    // whatever the thread count); Embree copies them, so one batch is in memory at a time.
+    ForEachTile(
+        view, charts, stream::TileParts::Mesh, [](uint32_t, stream::ChartTile&) { return 0; },
+        [&](uint32_t c, stream::ChartTile& tile, int) {
+            if (tile.triangles.empty())
+                return;
+            xyz.clear();
+            idx.clear();
+            for (const Vec3f& p : tile.position)
+                xyz.insert(xyz.end(), {p.x, p.y, p.z});
+            for (const auto& t : tile.triangles)
+                idx.insert(idx.end(), t.begin(), t.end());
+            const uint32_t id = vis.AddTriangles(xyz, idx, "chart");
+            CHECK_EQ(id, geom_chart.size());
+            geom_chart.push_back(c);
+        });
+    std::vector<float>().swap(xyz);
+    std::vector<uint32_t>().swap(idx);
+    if (geom_chart.empty())
+        return;
+    vis.Commit();
+    const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
+    ParallelFor(y0, y1, [&](int64_t py) {
+        std::vector<solve::Segment> segs(per_row);
+        std::vector<solve::Hit> found(per_row);
+        SampleHit* row = &(*hits)[size_t(py - y0) * per_row];
+        size_t r = 0;
+        for (int px = 0; px < cam.width; ++px)
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx, ++r) {
+                    const Vec3f d = rays.Direction(px, int(py), sx, sy, k);
+                    segs[r] = solve::Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z),
+                                             0.f, d.x, d.y, d.z, row[r].t};
+                }
+        vis.Intersect(segs, found);
+        r = 0;
+        for (int px = 0; px < cam.width; ++px)
+            for (int s = 0; s < k * k; ++s, ++r) {
+                const solve::Hit& h = found[r];
+                if (h.geom_id == solve::kNoHit || !(h.t < row[r].t))
+                    continue;
+                const solve::Segment& g = segs[r];
+                row[r] = SampleHit{h.t, h.u, h.v, geom_chart[h.geom_id], h.prim_id,
+                                   h.ng_x * g.dx + h.ng_y * g.dy + h.ng_z * g.dz >= 0};
+            }
+    });
+}
+
+// Pass 2: each hit sample's radiance, chart by chart (one tile and shader per chart in
+// flight per worker); samples that miss or meet a back are left alone.
+void ShadeSamples(const BakeView& view, const RenderOptions& opt, const PinholeRays& rays,
+                  int y0, const std::vector<SampleHit>& hits, std::vector<Vec3f>* radiance) {
+    const Camera& cam = opt.camera;
+    const int k = opt.samples;
+    const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
+    // Samples by chart (counting sort, in sample order within a chart).
+    const size_t n = view.chart_count();
+    std::vector<uint32_t> first(n + 1, 0);
+    for (const SampleHit& h : hits)
+        if (h.chart != solve::kNoHit && !h.back)
+            ++first[h.chart + 1];
+    for (size_t c = 0; c < n; ++c)
+        first[c + 1] += first[c];
+    std::vector<uint32_t> order(first[n]), fill(first.begin(), first.end() - 1);
+    for (size_t i = 0; i < hits.size(); ++i)
+        if (hits[i].chart != solve::kNoHit && !hits[i].back)
+            order[fill[hits[i].chart]++] = uint32_t(i);
+    std::vector<uint32_t> charts;
+    for (uint32_t c = 0; c < n; ++c)
+        if (first[c + 1] > first[c])
+            charts.push_back(c);
+    ForEachTile(
+        view, charts, stream::TileParts::Mesh,
+        [&](uint32_t c, stream::ChartTile& tile) {
+            tile.grid = {};  // shading here needs triangles and barycentrics only
+            const std::shared_ptr<const ChartField> field = view.Field(c);
+            const ChartShader sh(tile, *field, view.solution.radiosity, view.scene,
+                                 view.TilePath(c), view.Seams(c));
+            for (uint32_t j = first[c]; j < first[c + 1]; ++j) {
+                const uint32_t i = order[j];
+                const SampleHit& h = hits[i];
+                const ShadingPoint p = sh.AtTriangle(h.prim, 1 - h.u - h.v, h.u, h.v);
+                if (opt.glossy) {
+                    const size_t in_row = i % per_row, s = in_row % size_t(k * k);
+                    const Vec3f d = rays.Direction(int(in_row / size_t(k * k)),
+                                                   y0 + int(i / per_row), int(s) % k,
+                                                   int(s) / k, k);
+                    (*radiance)[i] = sh.Glossy(p, -d);
+                } else {
+                    (*radiance)[i] = sh.Radiosity(p) / kPi;
+                }
+            }
+            return 0;
+        },
+        [](uint32_t, stream::ChartTile&, int) {});
+}
+
+// Camera samples traced and shaded at once: 1M (36 MB of hits and radiance); taller
+// images go in bands of rows, each band tracing every group again.
+constexpr size_t kBandSamples = size_t(1) << 20;
+
+}  // namespace
+
 RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     const Camera& cam = opt.camera;
     const PinholeRays rays(cam);  // validates the camera
     if (opt.samples < 1 || opt.samples > 16)
         UsageError("--samples {}: expected 1 to 16", opt.samples);
-
-    // The full-resolution mesh: one Embree geometry per chart with triangles.
-    const size_t n = view.chart_count();
-    std::vector<stream::ChartTile> tiles(n);
-    std::vector<std::unique_ptr<ChartShader>> shaders(n);
-    ParallelFor(0, int64_t(n), [&](int64_t c) {
-        const std::string path = view.TilePath(uint32_t(c));
-        auto& tile = tiles[size_t(c)];
-        tile = stream::ReadTile(path, stream::TileParts::Mesh);
-        tile.grid = {};  // shading here needs triangles and barycentrics only
-        shaders[size_t(c)] = std::make_unique<ChartShader>(
-            tile, view.solution.fields[size_t(c)], view.solution.radiosity, view.scene, path,
-            view.Seams(uint32_t(c)));
-    });
-    solve::VisibilityScene vis;
-    std::vector<uint32_t> geom_chart;
-    std::vector<float> xyz;
-    std::vector<uint32_t> idx;
-    for (size_t c = 0; c < n; ++c) {
-        const auto& tile = tiles[c];
-        if (tile.triangles.empty())
-            continue;
-        xyz.clear();
-        idx.clear();
-        for (const Vec3f& p : tile.position)
-            xyz.insert(xyz.end(), {p.x, p.y, p.z});
-        for (const auto& t : tile.triangles)
-            idx.insert(idx.end(), t.begin(), t.end());
-        const uint32_t id = vis.AddTriangles(xyz, idx, "chart");
-        CHECK_EQ(id, geom_chart.size());
-        geom_chart.push_back(uint32_t(c));
-    }
-    vis.Commit();
+    if (opt.group_triangles == 0)
+        UsageError("render: group_triangles must be at least 1");
 
     RenderedImage img;
     img.width = cam.width;
@@ -137,53 +252,52 @@ RenderedImage Render(const BakeView& view, const RenderOptions& opt) {
     img.rgb.assign(size_t(cam.width) * size_t(cam.height) * 3, 0.f);
     const int k = opt.samples;
     const size_t per_row = size_t(cam.width) * size_t(k) * size_t(k);
-    std::vector<uint64_t> row_hits(size_t(cam.height), 0);
-    ProgressStage progress("render", uint64_t(cam.height), "rows");
-    ParallelFor(0, cam.height, [&](int64_t py) {
-        std::vector<solve::Segment> segs(per_row);
-        std::vector<solve::Hit> hits(per_row);
-        std::vector<Vec3f> dirs(per_row);
-        size_t r = 0;
-        for (int px = 0; px < cam.width; ++px)
-            for (int sy = 0; sy < k; ++sy)
-                for (int sx = 0; sx < k; ++sx, ++r) {
-                    dirs[r] = rays.Direction(px, int(py), sx, sy, k);
-                    segs[r] =
-                        solve::Segment{float(cam.eye.x), float(cam.eye.y), float(cam.eye.z), 0.f,
-                                dirs[r].x,        dirs[r].y,        dirs[r].z,        INFINITY};
-                }
-        vis.Intersect(segs, hits);
-        uint64_t count = 0;
-        const float weight = 1.f / float(k * k);
-        for (int px = 0; px < cam.width; ++px) {
-            Vec3f sum{};
-            for (int s = 0; s < k * k; ++s) {
-                const size_t i = size_t(px) * size_t(k * k) + size_t(s);
-                const solve::Hit& h = hits[i];
-                if (h.geom_id == solve::kNoHit) {
-                    sum += opt.background ? *opt.background : solve::SkyRadiance(view.scene.sky, dirs[i]);
-                    continue;
-                }
-                ++count;
-                // The back of a surface is black, as the solver and the reference path
-                // tracer have it: light is solved on the side the triangles face.
-                if (h.ng_x * dirs[i].x + h.ng_y * dirs[i].y + h.ng_z * dirs[i].z >= 0)
-                    continue;
-                const ChartShader& sh = *shaders[geom_chart[h.geom_id]];
-                const ShadingPoint p = sh.AtTriangle(h.prim_id, 1 - h.u - h.v, h.u, h.v);
-                sum += opt.glossy ? sh.Glossy(p, -dirs[i]) : sh.Radiosity(p) / kPi;
-            }
-            float* out = &img.rgb[(size_t(py) * size_t(cam.width) + size_t(px)) * 3];
-            for (int c = 0; c < 3; ++c)
-                out[c] = sum[c] * weight;
+    const int band = int(std::clamp<size_t>(kBandSamples / per_row, 1, size_t(cam.height)));
+    const auto groups = ChartGroups(view.manifest, opt.group_triangles);
+    ProgressStage progress("render", uint64_t(cam.height) * (groups.size() + 1), "rows");
+    std::vector<SampleHit> hits;
+    std::vector<Vec3f> radiance;
+    for (int y0 = 0; y0 < cam.height; y0 += band) {
+        const int y1 = std::min(cam.height, y0 + band);
+        hits.assign(size_t(y1 - y0) * per_row, SampleHit{});
+        for (const auto& g : groups) {
+            TraceGroup(view, g, rays, cam, k, y0, y1, &hits);
+            progress.Add(uint64_t(y1 - y0));
         }
-        row_hits[size_t(py)] = count;
-        progress.Add();
-    });
+        radiance.assign(hits.size(), Vec3f{});
+        ShadeSamples(view, opt, rays, y0, hits, &radiance);
+        // Each pixel sums its samples in sample order, as one pass over them would.
+        const float weight = 1.f / float(k * k);
+        for (int py = y0; py < y1; ++py) {
+            for (int px = 0; px < cam.width; ++px) {
+                Vec3f sum{};
+                for (int s = 0; s < k * k; ++s) {
+                    const size_t i = size_t(py - y0) * per_row + size_t(px) * size_t(k * k) +
+                                     size_t(s);
+                    const SampleHit& h = hits[i];
+                    if (h.chart == solve::kNoHit) {
+                        sum += opt.background
+                                   ? *opt.background
+                                   : solve::SkyRadiance(view.scene.sky,
+                                                        rays.Direction(px, py, s % k, s / k, k));
+                        continue;
+                    }
+                    ++img.hits;
+                    // The back of a surface is black, as the solver and the reference path
+                    // tracer have it: light is solved on the side the triangles face.
+                    if (h.back)
+                        continue;
+                    sum += radiance[i];
+                }
+                float* out = &img.rgb[(size_t(py) * size_t(cam.width) + size_t(px)) * 3];
+                for (int c = 0; c < 3; ++c)
+                    out[c] = sum[c] * weight;
+            }
+        }
+        progress.Add(uint64_t(y1 - y0));
+    }
     progress.Finish();
     img.rays = uint64_t(per_row) * uint64_t(cam.height);
-    for (uint64_t h : row_hits)
-        img.hits += h;
     return img;
 }
 

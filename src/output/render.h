@@ -7,9 +7,15 @@
 // triangles face, and nothing lights the back (the reference path tracer agrees). Rays that miss see the background: the
 // given colour, else the scene's sky radiance (uniform, or CIE overcast by elevation).
 //
-// Deterministic: each pixel depends on its own rays only; rows run in parallel through
-// core/parallel.h. Memory: the whole mesh (positions in Embree, uv/normal/colour for
-// shading), like the visibility scene of a full-resolution solve.
+// Out of core, in two passes over bands of rows: the camera samples are traced against
+// groups of consecutive charts of at most `group_triangles` triangles, one Embree scene at
+// a time, each sample keeping its closest hit (a tie keeps the lower chart id); then the
+// hit samples are shaded chart by chart, one tile and shader per worker in flight.
+// Memory: one group's scene (~55 B per triangle, 1M triangles by default) and 36 B per
+// sample of a band (at most 1M samples), whatever the mesh.
+//
+// Deterministic: each sample depends on its own ray and the fixed groups only; rows and
+// charts run in parallel through core/parallel.h, each writing its own slots.
 #pragma once
 
 #include "core/camera.h"
@@ -32,6 +38,9 @@ struct RenderOptions {
     bool glossy = false;
     int samples = 1;                  // per pixel and axis: samples^2 stratified rays
     std::optional<Vec3f> background;  // radiance of missed rays; default: the sky
+    // Triangles per Embree scene. Fixed, not from --memory: a tie between charts at the same
+    // distance resolves by the grouping, so the same groups give the same bytes.
+    uint64_t group_triangles = uint64_t(1) << 20;
 };
 
 struct RenderedImage {

@@ -53,7 +53,8 @@ VertexColorStats WriteVertexColors(const BakeView& view, const std::string& path
                                          opt.cache_bytes));
     };
     const std::string vpath = stream::Spill::VerticesPath(view.dir);
-    DiskArray<Vec3f> positions(vpath, false, cache(sizeof(Vec3f)));
+    // Read in order once (pass 2): a few pages are enough.
+    DiskArray<Vec3f> positions(vpath, false, std::min(cache(sizeof(Vec3f)), size_t(4) << 20));
     if (positions.size() != nv)
         CorruptError({vpath}, "{} vertices but the manifest says {}", positions.size(), nv);
 

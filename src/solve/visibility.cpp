@@ -94,9 +94,9 @@ void ThrowIfError(const char* what) {
     std::string msg = t_last_error.empty() ? ErrorName(e) : t_last_error;
     t_last_error.clear();
     if (e == RTC_ERROR_OUT_OF_MEMORY && g_limit.load() > 0)
-        msg += fmt::format(" [Embree memory limit {} bytes, 1/8 of --memory; the visibility "
-                           "mesh was sized at ingest: a larger --memory, or ingest again with "
-                           "this one]",
+        msg += fmt::format(" [Embree memory limit {} bytes, half of --memory: the visibility "
+                           "mesh, sized at ingest to 64 MiB of Embree scene whatever the "
+                           "budget, needs --memory 256M]",
                            g_limit.load());
     throw Error(ErrorKind::Io, fmt::format("Embree: {} failed: {}", what, msg));
 }

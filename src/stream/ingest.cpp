@@ -35,13 +35,16 @@ double Since(Clock::time_point t) {
 }
 
 // In-core cost of one brick triangle through repair, charting and parameterization
-// (OpenMesh, Eigen factorizations), measured with /usr/bin/time on the scans; the brick
-// size follows from it and the budget.
-constexpr uint64_t kBytesPerBrickTriangle = 2000;
-// Bricks processed at once (each also runs parallel loops inside). A constant, not the
-// thread count, so the brick layout and hence every tile's bytes do not depend on
-// --threads.
-constexpr int kBricksInFlight = 2;
+// (OpenMesh, Eigen factorizations), measured with /usr/bin/time: igea as one brick of 269K
+// faces peaks at 94 MiB for the whole process (366 B per face), so 400 B. The budget
+// decides from it how many bricks are in core at once, never their size.
+constexpr uint64_t kBytesPerBrickTriangle = 400;
+// Bricks processed at once (each also runs parallel loops inside): two when two fit the
+// budget, else one. Which worker builds a brick changes no byte (each writes only its own
+// files), so neither --threads nor --memory changes the tiles.
+int BricksInFlight(const MemoryBudget& budget, uint64_t brick_faces) {
+    return budget.Bricks() >= 2 * brick_faces * kBytesPerBrickTriangle ? 2 : 1;
+}
 
 void PrepareDirectory(const IngestOptions& opt) {
     const std::string& dir = opt.out_dir;
@@ -67,15 +70,15 @@ std::string BrickProxyPath(const std::string& dir, uint32_t brick) {
     return dir + name;
 }
 
-// Pass 4: the full repaired mesh, one chunk per brick, when its Embree scene fits the
-// visibility share of the budget; else a vertex-clustered proxy that fits it
-// (proxy_cluster.h), one chunk.
-void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_triangles, Manifest* m) {
+// Pass 4: the full repaired mesh, one chunk per brick, when its Embree scene fits
+// `visibility` bytes (the solve's visibility share, the same for every budget); else a
+// vertex-clustered proxy that fits it (proxy_cluster.h), one chunk.
+void WriteProxy(const std::string& dir, const std::vector<uint64_t>& brick_triangles,
+                uint64_t visibility, Manifest* m) {
     const uint32_t bricks = uint32_t(brick_triangles.size());
     uint64_t total = 0;
     for (uint64_t n : brick_triangles)
         total += n;
-    const uint64_t visibility = MemoryBudget(m->memory_budget).Visibility();
     const uint64_t full_budget = FullMeshTriangleBudget(visibility);
     const uint64_t budget = std::max<uint64_t>(ProxyTriangleBudget(visibility), 1);
     const double diag = Length(m->bbox_max - m->bbox_min);
@@ -271,8 +274,7 @@ Manifest Ingest(const IngestOptions& opt) {
     // Pass 2: bricks.
     auto t1 = Clock::now();
     BinOptions bopt;
-    bopt.max_faces = std::clamp<uint64_t>(
-        budget.Bricks() / (uint64_t(kBricksInFlight) * kBytesPerBrickTriangle), 20000, 400000);
+    bopt.max_faces = std::max<uint64_t>(opt.brick_faces, 1);
     // Caches no larger than the files they cache (small meshes need little memory).
     const uint64_t spilled_bytes = sr.vertex_count * 16 + sr.face_count * 16;
     bopt.cache_bytes = std::min<uint64_t>(
@@ -323,12 +325,14 @@ Manifest Ingest(const IngestOptions& opt) {
     std::vector<BrickResult> results(plan.bricks.size());
     std::vector<uint64_t> proxy_triangles(plan.bricks.size(), 0);
     ProgressStage chart_progress("charts", sr.face_count, "faces");
-    // kBricksInFlight workers take bricks in turn; each brick writes only its own files
-    // and result slot, so which worker runs it does not matter.
+    // The workers take bricks in turn; each brick writes only its own files and result
+    // slot, so which worker runs it does not matter.
     std::atomic<uint32_t> next{0};
     std::atomic<bool> failed{false};
     const uint32_t brick_count = uint32_t(plan.bricks.size());
-    ParallelFor(0, kBricksInFlight, [&](int64_t) {
+    const int in_flight = BricksInFlight(budget, bopt.max_faces);
+    spdlog::info("{} brick(s) in core at a time", in_flight);
+    ParallelFor(0, in_flight, [&](int64_t) {
         for (uint32_t b = next++; b < brick_count && !failed; b = next++) {
             try {
                 BrickResult r = BuildBrickCharts(dir, b, copt);
@@ -371,7 +375,7 @@ Manifest Ingest(const IngestOptions& opt) {
 
     // Pass 4: the visibility mesh.
     auto t3 = Clock::now();
-    WriteProxy(dir, proxy_triangles, &m);
+    WriteProxy(dir, proxy_triangles, opt.visibility_bytes, &m);
     m.timings.emplace_back("proxy", Since(t3));
 
     // The spill's face list and brick files are not needed any more.

@@ -128,6 +128,25 @@ TEST_F(RenderTest, SameImageForAnyThreadCount) {
     EXPECT_EQ(0, std::memcmp(all.rgb.data(), one.rgb.data(), all.rgb.size() * sizeof(float)));
 }
 
+TEST_F(RenderTest, SameImageWhenChartsAreTracedOneGroupAtATime) {
+    // One Embree scene per chart (the out-of-core path of a large mesh) against one scene
+    // of both: the same closest hits, the same shading, the same bytes.
+    ro_.camera.eye = Vec3d(-0.5, -1, 2);
+    ro_.samples = 3;
+    const RenderedImage whole = Render(view_, ro_);
+    RenderOptions grouped = ro_;
+    grouped.group_triangles = 1;
+    const RenderedImage parts = Render(view_, grouped);
+    ASSERT_EQ(whole.rgb.size(), parts.rgb.size());
+    EXPECT_GT(whole.hits, 0u);
+    EXPECT_EQ(whole.hits, parts.hits);
+    EXPECT_EQ(0, std::memcmp(whole.rgb.data(), parts.rgb.data(), whole.rgb.size() * sizeof(float)));
+    // With the sky as background too (its radiance follows each missed ray).
+    ro_.background.reset();
+    grouped.background.reset();
+    EXPECT_EQ(Render(view_, ro_).rgb, Render(view_, grouped).rgb);
+}
+
 TEST_F(RenderTest, WritesExrAndPng) {
     const RenderedImage img = Render(view_, ro_);
     WriteRenderedImage(img, dir_ + "/v.exr", {}, io::ExrPixelType::Float);

@@ -39,11 +39,15 @@ std::string TempDir(const std::string& name) {
 }
 
 Manifest IngestScan(const std::string& input, const std::string& dir, int threads,
-                    uint64_t memory = uint64_t(1) << 30) {
+                    uint64_t brick_faces = IngestOptions().brick_faces,
+                    uint64_t memory = uint64_t(1) << 30, uint64_t visibility_bytes = 0) {
     IngestOptions o;
+    if (visibility_bytes)
+        o.visibility_bytes = visibility_bytes;
     o.inputs = {input};
     o.out_dir = dir;
     o.threads = threads;
+    o.brick_faces = brick_faces;
     o.memory = memory;
     o.force = true;
     return Ingest(o);
@@ -210,10 +214,10 @@ TEST(IngestData, BunnyBaseHolesAreFilledAndBrickCutsAreNot) {
             EXPECT_EQ(n, 2);
     }
     {
-        // A small budget cuts the bunny into bricks: the cuts stay closed (the two sides
-        // meet edge to edge), no cut is mistaken for a hole; holes crossing a cut may stay
-        // open, but only with input boundary edges.
-        const Manifest m = IngestScan(path, dir, 0, uint64_t(32) << 20);
+        // Small bricks cut the bunny: the cuts stay closed (the two sides meet edge to
+        // edge), no cut is mistaken for a hole; holes crossing a cut may stay open, but
+        // only with input boundary edges.
+        const Manifest m = IngestScan(path, dir, 0, 20000);
         ASSERT_GE(m.brick_count, 3u);
         Checked c;
         CheckTiles(dir, m, "bunny, bricks", &c);
@@ -235,31 +239,36 @@ std::map<std::string, std::string> Files(const std::string& dir) {
     return out;
 }
 
-TEST(IngestData, TilesAreByteIdenticalAcrossRunsAndThreadCounts) {
+TEST(IngestData, TilesAreByteIdenticalAcrossRunsThreadCountsAndBudgets) {
     const std::string path = Scan("bun_zipper.ply");
     if (!fs::exists(path))
         GTEST_SKIP() << "no " << path;
-    // Several bricks, so bricks really run concurrently with two threads.
-    const uint64_t memory = uint64_t(32) << 20;
-    const std::string a = TempDir("det_a"), b = TempDir("det_b"), c = TempDir("det_c");
-    const Manifest ma = IngestScan(path, a, 2, memory);
-    IngestScan(path, b, 2, memory);
-    IngestScan(path, c, 1, memory);
+    // Several bricks, so bricks really run concurrently with two threads, and a visibility
+    // share the full bunny does not fit, so the proxy is clustered across brick borders.
+    const uint64_t bricks = 20000, visibility = uint64_t(2) << 20;
+    const uint64_t big = uint64_t(4) << 30, small = uint64_t(8) << 20;  // small: one brick at a time
+    const std::string a = TempDir("det_a"), b = TempDir("det_b"), c = TempDir("det_c"),
+                      d = TempDir("det_d");
+    const Manifest ma = IngestScan(path, a, 2, bricks, big, visibility);
+    IngestScan(path, b, 2, bricks, big, visibility);
+    IngestScan(path, c, 1, bricks, big, visibility);
+    const Manifest md = IngestScan(path, d, 2, bricks, small, visibility);
     ASSERT_GE(ma.brick_count, 3u);
-    const auto fa = Files(a), fb = Files(b), fc = Files(c);
+    ASSERT_GT(ma.proxy_deviation, 0) << "the test needs a clustered proxy";
+    EXPECT_EQ(md.brick_count, ma.brick_count);
+    const auto fa = Files(a), fb = Files(b), fc = Files(c), fd = Files(d);
     EXPECT_GT(fa.size(), ma.charts.size());  // tiles, proxy, vertices ...
     EXPECT_TRUE(fa == fb) << "two runs with 2 threads differ";
     EXPECT_TRUE(fa == fc) << "1 and 2 threads differ";
-    for (const auto& [name, bytes] : fa) {
-        auto it = fc.find(name);
-        if (it == fc.end() || it->second != bytes)
-            ADD_FAILURE() << name << " differs";
-    }
-    // Also the same budget decides the same bricks whatever the thread count.
-    const Manifest big1 = IngestScan(path, b, 1), big2 = IngestScan(path, c, 2);
-    EXPECT_EQ(big1.brick_faces, big2.brick_faces);
-    for (const std::string& d : {a, b, c})
-        fs::remove_all(d);
+    EXPECT_TRUE(fa == fd) << "--memory 4G and 8M differ";
+    for (const auto* other : {&fc, &fd})
+        for (const auto& [name, bytes] : fa) {
+            auto it = other->find(name);
+            if (it == other->end() || it->second != bytes)
+                ADD_FAILURE() << name << " differs";
+        }
+    for (const std::string& dir : {a, b, c, d})
+        fs::remove_all(dir);
 }
 
 TEST(IngestData, CorruptedTileIsRejectedByName) {

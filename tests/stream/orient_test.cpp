@@ -99,7 +99,7 @@ struct Result {
     std::string tiles;  // all tiles' bytes
 };
 
-Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint64_t(1) << 30,
+Result IngestMesh(const Mesh& m, const std::string& name, uint64_t brick_faces = 400000,
                   int threads = 0) {
     const std::string ply = TempPath(name + ".ply"), dir = TempPath(name + ".mebake");
     {
@@ -115,7 +115,7 @@ Result IngestMesh(const Mesh& m, const std::string& name, uint64_t memory = uint
     IngestOptions o;
     o.inputs = {ply};
     o.out_dir = dir;
-    o.memory = memory;
+    o.brick_faces = brick_faces;
     o.force = true;
     o.threads = threads;
     Result r;
@@ -176,17 +176,17 @@ TEST(Orient, NearlyClosedSphereWoundInwardsIsTurned) {
 }
 
 TEST(Orient, InwardsSphereAcrossBricksIsTurnedAsOneComponent) {
-    // 49K triangles under 64 MB: bricks of 20K faces, so the sphere spans several bricks.
+    // 49K triangles in bricks of 20K faces: the sphere spans several bricks.
     Mesh s = CubeGrid(64, OnSphere);
     s.Flip();
-    const Result r = IngestMesh(s, "sphere_bricks", uint64_t(64) << 20);
+    const Result r = IngestMesh(s, "sphere_bricks", 20000);
     ASSERT_GT(r.manifest.brick_count, 1u);
     EXPECT_EQ(r.manifest.orientation.components, 1u);
     EXPECT_EQ(r.manifest.orientation.flipped, 1u);
     EXPECT_EQ(r.manifest.orientation.flipped_triangles, s.f.size());
     EXPECT_NEAR(r.volume, 4 * M_PI / 3, 0.01);
     // The same tiles on one thread (the bricks are scanned two at a time otherwise).
-    const Result one = IngestMesh(s, "sphere_bricks_1", uint64_t(64) << 20, 1);
+    const Result one = IngestMesh(s, "sphere_bricks_1", 20000, 1);
     EXPECT_TRUE(one.tiles == r.tiles);
 }
 

@@ -5,7 +5,6 @@
 // simplifies with the same bytes for 1 and 2 threads, a large one keeps the full mesh.
 #include "stream/proxy_cluster.h"
 
-#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "io/chunk_file.h"
 #include "stream/ingest.h"
@@ -266,13 +265,14 @@ std::string WriteObj(const ProxyMesh& m, const std::string& name) {
 }
 
 Manifest IngestSphere(const std::string& obj, const std::string& dir, int threads,
-                      uint64_t memory) {
+                      uint64_t visibility_bytes) {
     fs::remove_all(dir);  // a failed earlier run leaves a directory ingest refuses to touch
     IngestOptions o;
     o.inputs = {obj};
     o.out_dir = dir;
     o.threads = threads;
-    o.memory = memory;
+    o.visibility_bytes = visibility_bytes;
+    o.brick_faces = 20000;
     o.force = true;
     return Ingest(o);
 }
@@ -304,10 +304,10 @@ TEST(ProxyIngest, SmallBudgetSimplifiesCrackFreeAndDeterministic) {
     const std::string obj = WriteObj(Icosphere(6), "mebake_proxy_sphere.obj");
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_a").string();
     const std::string b = (fs::temp_directory_path() / "mebake_proxy_b").string();
-    const uint64_t memory = uint64_t(16) << 20;  // full 18724 triangles, proxy 10485; 8 bricks
-    const uint64_t budget = ProxyTriangleBudget(MemoryBudget(memory).Visibility());
-    const Manifest ma = IngestSphere(obj, a, 2, memory);
-    IngestSphere(obj, b, 1, memory);
+    const uint64_t visibility = uint64_t(1) << 20;  // full 18724 triangles, proxy 10485; 8 bricks
+    const uint64_t budget = ProxyTriangleBudget(visibility);
+    const Manifest ma = IngestSphere(obj, a, 2, visibility);
+    IngestSphere(obj, b, 1, visibility);
     ASSERT_GT(ma.brick_count, 2u) << "the test needs brick borders";
     EXPECT_LE(ma.proxy_triangles, budget);
     EXPECT_GE(ma.proxy_triangles, budget / 4);
@@ -342,7 +342,7 @@ TEST(ProxyIngest, FullMeshWhenItFits) {
     const ProxyMesh sphere = Icosphere(5);
     const std::string obj = WriteObj(sphere, "mebake_proxy_sphere5.obj");
     const std::string a = (fs::temp_directory_path() / "mebake_proxy_full").string();
-    const Manifest m = IngestSphere(obj, a, 2, uint64_t(64) << 20);  // full mesh budget 74898
+    const Manifest m = IngestSphere(obj, a, 2, uint64_t(4) << 20);  // full mesh budget 74898
     EXPECT_EQ(m.proxy_triangles, 20480u);
     EXPECT_EQ(m.proxy_deviation, 0);
     EXPECT_EQ(m.proxy_cell_size, 0);
