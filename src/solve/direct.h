@@ -117,6 +117,12 @@ private:
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
+    // The points with their visibility points moved up onto the real surface where they
+    // lie under it (one ray each along the normal, at most reach_ long).
+    std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points) const;
+    // How far under the surface a visibility point is looked for, in ray offsets (half a
+    // light-map texel): a few geometry-image texels.
+    static constexpr float kOriginReach = 8;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
@@ -125,7 +131,7 @@ private:
     std::vector<Light> lights_;
     Sky sky_;
     std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
-    float offset_, far_;
+    float offset_, reach_, far_;
 };
 
 // ClipToHalfSpace of polygon_light.h, returning the clipped polygon.
