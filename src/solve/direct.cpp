@@ -215,6 +215,21 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
         AddSky(on_surface, out);
 }
 
+bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points);
+    for (const auto& l : lights_) {
+        SegmentBatch batch;
+        for (const auto& rp : on_surface)
+            if (Faces(l, rp))
+                batch.AddSegment(rp.vis_point + rp.normal * offset_, l.classify.back());
+        batch.Trace(vis_, RayKind::kClassify);
+        const size_t hidden = size_t(std::count(batch.occluded.begin(), batch.occluded.end(), 1));
+        if (hidden > 0 && hidden < batch.size())
+            return true;
+    }
+    return false;
+}
+
 // A receiver's visibility point is interpolated between geometry-image texel centres, and
 // on a convex bend that chord runs under the real surface: by more than the ray offset
 // where the surface turns fast within a texel (a crease, a rim, a fold of drapery), and

@@ -85,6 +85,9 @@ public:
     enum PointClass : uint8_t { kPointAway, kPointLit, kPointUmbra, kPointPenumbra };
     void ClassifyPoints(size_t light, std::span<const ReceiverPoint> points,
                         std::vector<uint8_t>* kind) const;
+    // Whether some light is seen from some of the points and hidden from others that it
+    // faces (one ray per point to the light's centre): a shadow edge among them.
+    bool ShadowEdgeAmong(std::span<const ReceiverPoint> points) const;
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.

@@ -34,6 +34,11 @@ constexpr int kCoherentLevels = 3;
 // the cap cost 1.16M of 2.17M classification rays, two levels above it 0.4M.
 constexpr int kBoundaryLevelsAboveCap = 2;
 
+// A node whose fit passes is still split where the lights' visibility changes between the
+// points of a grid this fine (at most) that its own points missed: a shadow smaller than the
+// spacing of its control points (lucy's folds, the crevices of nefertiti's crown).
+constexpr int kEdgeGrid = 16;
+
 float MaxAbs(const std::vector<float>& v) {
     float m = 0;
     for (float x : v)
@@ -68,6 +73,27 @@ public:
         if (parts == DirectLight::kSky ? direct_.has_sky() : direct_.has_lights())
             direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known);
         ToGaussAndControl(n_gauss, n_ctrl, control);
+    }
+
+    // A shadow the node's own points all missed: the lights' visibility at one point per
+    // node of the depth cap, up to kEdgeGrid x kEdgeGrid, where that is finer than the
+    // control grid (docs/method.md, "Refinement").
+    bool MissedShadowEdge(const QuadNode& node) {
+        const int n = std::min(kEdgeGrid, 1 << std::max(0, max_level_ - int(node.level)));
+        if (n <= gc_)
+            return false;
+        const int gl = std::min(finest_, int(node.level) + 2);
+        edge_pts_.clear();
+        for (int b = 0; b < n; ++b) {
+            for (int a = 0; a < n; ++a) {
+                const float u = float(node.U((a + 0.5) / n)), v = float(node.V((b + 0.5) / n));
+                auto smp = SampleBilinear(sc_.geometry, gl, u, v);
+                edge_pts_.push_back(ReceiverPoint{smp.position, smp.normal,
+                                                  VisPoint(sc_, gl, u, v, smp),
+                                                  HorizonNormal(sc_, u, v)});
+            }
+        }
+        return direct_.ShadowEdgeAmong(edge_pts_);
     }
 
     int order() const { return ng_ - 1; }
@@ -167,7 +193,7 @@ private:
     ProbeCache probe_cache_;  // this chart's probes (node corners are shared)
     std::vector<int> slot_;
     std::vector<ProbeKey> keys_;
-    std::vector<ReceiverPoint> all_pts_, pts_, cpts_;
+    std::vector<ReceiverPoint> all_pts_, pts_, cpts_, edge_pts_;
     std::vector<Vec3f> all_albedo_, albedo_, calb_;
     std::vector<float> e9_all_, e9_, ce9_;
 };
@@ -358,8 +384,9 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         if (!control)
             return;
         scale = std::max({scale, MaxAbs(sampler.ctrl_vals), float(reference_ * 0.02)});
-        const float err =
-            ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        float err = ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        if (err <= float(opt_.settings.tolerance) * scale && sampler.MissedShadowEdge(node))
+            err = scale;  // ranked as if the node missed by its largest value
         if (err > float(opt_.settings.tolerance) * scale)
             queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
     };
