@@ -37,11 +37,12 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
 }
 
 DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
-                         const VisibilityScene& vis, float ray_offset, float scene_size)
+                         const VisibilityScene& vis, float ray_offset, float scene_size,
+                         float surface_reach)
     : vis_(vis),
       sky_(scene.sky),
       offset_(ray_offset),
-      reach_(ray_offset * kOriginReach),
+      reach_(surface_reach > 0 ? surface_reach : ray_offset * kOriginReach),
       far_(scene_size * 100) {
     const int per_tri =
         std::max(2, int(std::ceil(std::sqrt(double(settings.light_samples)) - 1e-9)));

@@ -61,9 +61,14 @@ private:
 
 class DirectLight {
 public:
-    // Sampling counts come from `settings` (light_samples, sky_directions).
+    // How far under the surface a visibility point is looked for, in half light-map texels
+    // (Solver::RayOffset): four texels, one to four geometry-image texels.
+    static constexpr float kOriginReach = 8;
+    // Sampling counts come from `settings` (light_samples, sky_directions). Rays start
+    // ray_offset off the surface; a visibility point up to surface_reach under it moves up
+    // onto it first (OnSurface; 0: kOriginReach x ray_offset).
     DirectLight(const Scene& scene, const SolverSettings& settings, const VisibilityScene& vis,
-                float ray_offset, float scene_size);
+                float ray_offset, float scene_size, float surface_reach = 0);
 
     enum Parts { kLights = 1, kSky = 2, kAll = 3 };
     // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.
@@ -123,9 +128,6 @@ private:
     // The points with their visibility points moved up onto the real surface where they
     // lie under it (one ray each along the normal, at most reach_ long).
     std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points) const;
-    // How far under the surface a visibility point is looked for, in ray offsets (half a
-    // light-map texel): a few geometry-image texels.
-    static constexpr float kOriginReach = 8;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
