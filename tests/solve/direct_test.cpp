@@ -72,5 +72,34 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
     EXPECT_NEAR(e[0], 0, 0.05);
 }
 
+
+// A visibility point a little under the surface (as the chord between geometry-image texels
+// runs under a convex bend) must see the sky from the surface above it, not from below it;
+// one deeper than the reach stays where it is and sees nothing.
+TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
+    Scene scene;
+    scene.sky.type = Sky::Type::Uniform;
+    scene.sky.radiance = {1, 1, 1};
+    scene.sky.up = {0, 1, 0};
+    VisibilityScene vis;
+    // A floor y = 0 facing up (counter-clockwise seen from above), wide enough that no sky
+    // direction passes beside it from under it.
+    std::vector<float> floor = {-1e4f, 0, -1e4f, -1e4f, 0, 1e4f, 1e4f, 0, 1e4f, 1e4f, 0, -1e4f};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+    vis.AddTriangles(floor, tris, "floor");
+    vis.Commit();
+    const float offset = 1e-3f, reach = 0.05f;
+    DirectLight direct(scene, scene.solver, vis, offset, 10, reach);
+    auto sky_at = [&](float depth) {
+        std::vector<ReceiverPoint> pts = {{{0, -depth, 0}, {0, 1, 0}, {0, -depth, 0}}};
+        std::vector<float> e(9);
+        direct.Evaluate(pts, e);
+        return e[1];
+    };
+    EXPECT_NEAR(sky_at(0.02f), std::numbers::pi, 1e-3);   // under by 20 offsets: moved up
+    EXPECT_NEAR(sky_at(0.f), std::numbers::pi, 1e-3);     // on it: unchanged
+    EXPECT_NEAR(sky_at(0.2f), 0, 1e-6);                   // deeper than the reach: blocked
+}
+
 }  // namespace
 }  // namespace mebake::solve
