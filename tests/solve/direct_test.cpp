@@ -73,6 +73,19 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
 }
 
 
+// The refinement's test for a shadow between a node's points: the light's centre hidden
+// from some points and seen from others.
+TEST(DirectLight, ShadowEdgeAmongPoints) {
+    OccluderScene s(16);
+    DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
+    auto at = [](float x) { return ReceiverPoint{{x, 0, 0}, {0, 1, 0}, {x, 0, 0}}; };
+    const std::vector<ReceiverPoint> across = {at(3), at(0), at(3.1f)};
+    const std::vector<ReceiverPoint> lit = {at(3), at(3.1f)}, hidden = {at(0), at(0.1f)};
+    EXPECT_TRUE(direct.ShadowEdgeAmong(across));
+    EXPECT_FALSE(direct.ShadowEdgeAmong(lit));
+    EXPECT_FALSE(direct.ShadowEdgeAmong(hidden));
+}
+
 // A visibility point a little under the surface (as the chord between geometry-image texels
 // runs under a convex bend) must see the sky from the surface above it, not from below it;
 // one deeper than the reach stays where it is and sees nothing.
