@@ -53,11 +53,17 @@ TEST(DirectLight, PenumbraCloseToExact) {
     }
 }
 
-TEST(DirectLight, UniformSkyOnOpenPlane) {
+// A uniform sky of this radiance about +y, and nothing else.
+Scene SkyAlone(const Vec3d& radiance) {
     Scene scene;
     scene.sky.type = Sky::Type::Uniform;
-    scene.sky.radiance = {1, 2, 3};
+    scene.sky.radiance = radiance;
     scene.sky.up = {0, 1, 0};
+    return scene;
+}
+
+TEST(DirectLight, UniformSkyOnOpenPlane) {
+    const Scene scene = SkyAlone({1, 2, 3});
     VisibilityScene vis;
     std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
     std::vector<uint32_t> tri = {0, 1, 2};
@@ -90,10 +96,7 @@ TEST(DirectLight, ShadowEdgeAmongPoints) {
 // runs under a convex bend) must see the sky from the surface above it, not from below it;
 // one deeper than the reach stays where it is and sees nothing.
 TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
-    Scene scene;
-    scene.sky.type = Sky::Type::Uniform;
-    scene.sky.radiance = {1, 1, 1};
-    scene.sky.up = {0, 1, 0};
+    const Scene scene = SkyAlone({1, 1, 1});
     VisibilityScene vis;
     // A floor y = 0 facing up (counter-clockwise seen from above), wide enough that no sky
     // direction passes beside it from under it.
