@@ -37,8 +37,13 @@ std::vector<Vec3d> ClipToHalfSpace(std::span<const Vec3d> poly, const Vec3d& x, 
 }
 
 DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
-                         const VisibilityScene& vis, float ray_offset, float scene_size)
-    : vis_(vis), sky_(scene.sky), offset_(ray_offset), far_(scene_size * 100) {
+                         const VisibilityScene& vis, float ray_offset, float scene_size,
+                         float surface_reach)
+    : vis_(vis),
+      sky_(scene.sky),
+      offset_(ray_offset),
+      reach_(surface_reach > 0 ? surface_reach : ray_offset * kOriginReach),
+      far_(scene_size * 100) {
     const int per_tri =
         std::max(2, int(std::ceil(std::sqrt(double(settings.light_samples)) - 1e-9)));
     for (const auto& pl : scene.lights) {
@@ -204,10 +209,52 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     std::fill(out.begin(), out.end(), 0.f);
     if (cache)
         CHECK_EQ(keys.size(), probes);
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points);
     if (parts & kLights)
-        AddLights(points, out, probes, cache, keys, known);
+        AddLights(on_surface, out, probes, cache, keys, known);
     if (sky_.type != Sky::Type::None && (parts & kSky))
-        AddSky(points, out);
+        AddSky(on_surface, out);
+}
+
+bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points);
+    for (const auto& l : lights_) {
+        SegmentBatch batch;
+        for (const auto& rp : on_surface)
+            if (Faces(l, rp))
+                batch.AddSegment(rp.vis_point + rp.normal * offset_, l.classify.back());
+        batch.Trace(vis_, RayKind::kClassify);
+        const size_t hidden = size_t(std::count(batch.occluded.begin(), batch.occluded.end(), 1));
+        if (hidden > 0 && hidden < batch.size())
+            return true;
+    }
+    return false;
+}
+
+// A receiver's visibility point is interpolated between geometry-image texel centres, and
+// on a convex bend that chord runs under the real surface: by more than the ray offset
+// where the surface turns fast within a texel (a crease, a rim, a fold of drapery), and
+// rays from there hit the surface they leave (nefertiti under the sky alone: whole nodes
+// at 7 % of their sky, bench/RESULTS.md, "Issue 14 (session 7)"). One ray along the normal
+// finds out: leaving through the back of a triangle within `reach_` means the point is
+// under the surface, and its visibility point moves to where the ray left it.
+std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint> points) const {
+    std::vector<ReceiverPoint> out(points.begin(), points.end());
+    std::vector<Segment> segs(points.size());
+    for (size_t p = 0; p < points.size(); ++p) {
+        const Vec3f& o = points[p].vis_point;
+        const Vec3f& n = points[p].normal;
+        segs[p] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, reach_};
+    }
+    std::vector<Hit> hits(points.size());
+    TraceHits(vis_, segs, hits, RayKind::kOrigin);
+    for (size_t p = 0; p < points.size(); ++p) {
+        const Hit& h = hits[p];
+        const Vec3f ng(h.ng_x, h.ng_y, h.ng_z);
+        if (h.geom_id != kNoHit && Dot(ng, points[p].normal) > 0)
+            out[p].vis_point = points[p].vis_point + points[p].normal * h.t;
+    }
+    return out;
 }
 
 // Every light at the points. With probes (the first `probes` points surround one small

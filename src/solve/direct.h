@@ -61,9 +61,14 @@ private:
 
 class DirectLight {
 public:
-    // Sampling counts come from `settings` (light_samples, sky_directions).
+    // How far under the surface a visibility point is looked for, in half light-map texels
+    // (Solver::RayOffset): four texels, one to four geometry-image texels.
+    static constexpr float kOriginReach = 8;
+    // Sampling counts come from `settings` (light_samples, sky_directions). Rays start
+    // ray_offset off the surface; a visibility point up to surface_reach under it moves up
+    // onto it first (OnSurface; 0: kOriginReach x ray_offset).
     DirectLight(const Scene& scene, const SolverSettings& settings, const VisibilityScene& vis,
-                float ray_offset, float scene_size);
+                float ray_offset, float scene_size, float surface_reach = 0);
 
     enum Parts { kLights = 1, kSky = 2, kAll = 3 };
     // E (3 colours x 3 components, out[9*p + 3*c + k]) at each point, from the parts asked.
@@ -85,6 +90,9 @@ public:
     enum PointClass : uint8_t { kPointAway, kPointLit, kPointUmbra, kPointPenumbra };
     void ClassifyPoints(size_t light, std::span<const ReceiverPoint> points,
                         std::vector<uint8_t>* kind) const;
+    // Whether some light is seen from some of the points and hidden from others that it
+    // faces (one ray per point to the light's centre): a shadow edge among them.
+    bool ShadowEdgeAmong(std::span<const ReceiverPoint> points) const;
     bool has_sky() const { return sky_.type != Sky::Type::None; }
     bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.
@@ -117,6 +125,9 @@ private:
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
+    // The points with their visibility points moved up onto the real surface where they
+    // lie under it (one ray each along the normal, at most reach_ long).
+    std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
@@ -125,7 +136,7 @@ private:
     std::vector<Light> lights_;
     Sky sky_;
     std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
-    float offset_, far_;
+    float offset_, reach_, far_;
 };
 
 // ClipToHalfSpace of polygon_light.h, returning the clipped polygon.

@@ -20,10 +20,11 @@ void DirectLight::ClassifyPoints(size_t light, std::span<const ReceiverPoint> po
     kind->assign(points.size(), kPointAway);
     SegmentBatch batch;
     std::vector<size_t> owner;
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points);  // as Evaluate
     for (size_t p = 0; p < points.size(); ++p) {
         if (!Faces(l, points[p]))
             continue;
-        const Vec3f o = points[p].vis_point + points[p].normal * offset_;
+        const Vec3f o = on_surface[p].vis_point + points[p].normal * offset_;
         for (size_t k = 0; k < nk; ++k) {
             batch.AddSegment(o, l.classify[k]);
             owner.push_back(p);

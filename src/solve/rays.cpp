@@ -17,6 +17,14 @@ void SegmentBatch::Trace(const VisibilityScene& vis, RayKind kind) {
     g_rays[size_t(kind)].fetch_add(segments.size(), std::memory_order_relaxed);
 }
 
+void TraceHits(const VisibilityScene& vis, std::span<const Segment> segments, std::span<Hit> hits,
+               RayKind kind) {
+    if (segments.empty())
+        return;
+    vis.Intersect(segments, hits);
+    g_rays[size_t(kind)].fetch_add(segments.size(), std::memory_order_relaxed);
+}
+
 uint64_t TotalRays() {
     uint64_t n = 0;
     for (const auto& r : g_rays)

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace mebake::solve {
@@ -18,10 +19,11 @@ enum class RayKind : int {
     kLink,          // indirect light: receiver point to emitter texel
     kOther,
     kCluster,       // indirect light: visibility samples of a cluster link (cluster_links.cpp)
+    kOrigin,        // direct light: a receiver's ray origin moved onto the real surface
     kCount
 };
-inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky",
-                                                "link",     "other",    "cluster"};
+inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky",   "link",
+                                                "other",    "cluster",  "origin"};
 
 struct SegmentBatch {
     std::vector<Segment> segments;
@@ -42,6 +44,10 @@ struct SegmentBatch {
     // Fills `occluded` for every segment.
     void Trace(const VisibilityScene& vis, RayKind kind = RayKind::kOther);
 };
+
+// Closest hits of `segments` into `hits`, counted as `kind`.
+void TraceHits(const VisibilityScene& vis, std::span<const Segment> segments, std::span<Hit> hits,
+               RayKind kind);
 
 // Segments traced so far by this process (all threads), for statistics.
 uint64_t TotalRays();

@@ -15,9 +15,11 @@
 #include "solve/solver.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <queue>
+#include <unordered_map>
 
 namespace mebake::solve {
 
@@ -33,6 +35,14 @@ constexpr int kCoherentLevels = 3;
 // refinement (it is marked penumbra). Measured on the Cornell box with 4 lights: the pass at
 // the cap cost 1.16M of 2.17M classification rays, two levels above it 0.4M.
 constexpr int kBoundaryLevelsAboveCap = 2;
+
+// A node whose fit passes is still split where the lights' visibility changes between the
+// points of a grid this fine (at most) that its own points missed: a shadow smaller than the
+// spacing of its control points (lucy's folds, the crevices of nefertiti's crown).
+constexpr int kEdgeGrid = 16;
+
+// The direct light's ray offset, in units of Solver::RayOffset (half a light-map texel).
+constexpr float kDirectOffset = 0.25f;
 
 float MaxAbs(const std::vector<float>& v) {
     float m = 0;
@@ -66,9 +76,32 @@ public:
         const size_t probes = OrderPoints(node, control, n_gauss, n_ctrl);
         SamplePoints(node, gl, n_gauss, probes);
         e9_all_.assign(all_pts_.size() * 9, 0.f);
-        if (parts == DirectLight::kSky ? direct_.has_sky() : direct_.has_lights())
+        if (parts == DirectLight::kSky && direct_.has_sky())
+            SkyShared(node, gl, n_gauss);
+        else if (parts != DirectLight::kSky && direct_.has_lights())
             direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known);
         ToGaussAndControl(n_gauss, n_ctrl, control);
+    }
+
+    // A shadow the node's own points all missed: the lights' visibility at one point per
+    // node of the depth cap, up to kEdgeGrid x kEdgeGrid, where that is finer than the
+    // control grid (docs/method.md, "Refinement").
+    bool MissedShadowEdge(const QuadNode& node) {
+        const int n = std::min(kEdgeGrid, 1 << std::max(0, max_level_ - int(node.level)));
+        if (n <= gc_)
+            return false;
+        const int gl = std::min(finest_, int(node.level) + 2);
+        edge_pts_.clear();
+        for (int b = 0; b < n; ++b) {
+            for (int a = 0; a < n; ++a) {
+                const float u = float(node.U((a + 0.5) / n)), v = float(node.V((b + 0.5) / n));
+                auto smp = SampleBilinear(sc_.geometry, gl, u, v);
+                edge_pts_.push_back(ReceiverPoint{smp.position, smp.normal,
+                                                  VisPoint(sc_, gl, u, v, smp),
+                                                  HorizonNormal(sc_, u, v)});
+            }
+        }
+        return direct_.ShadowEdgeAmong(edge_pts_);
     }
 
     int order() const { return ng_ - 1; }
@@ -133,6 +166,37 @@ private:
         }
     }
 
+    // The sky at all_pts_: control points on a node's edges are its neighbours' too (same
+    // chart coordinates and geometry level, so the same value): each is traced once per
+    // chart and kept by its exact coordinates. A third fewer sky rays where GatherSky tests.
+    void SkyShared(const QuadNode& node, int gl, int n_gauss) {
+        std::vector<size_t> todo;
+        std::vector<ReceiverPoint> pts;
+        std::vector<ProbeKey> keys(slot_.size());
+        for (size_t k = 0; k < slot_.size(); ++k) {
+            const auto [u, v] = Uv(node, slot_[k], n_gauss);
+            keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), 0};
+            auto it = sky_cache_.find(keys[k]);
+            if (it != sky_cache_.end()) {
+                std::copy(it->second.begin(), it->second.end(), &e9_all_[k * 9]);
+            } else {
+                todo.push_back(k);
+                pts.push_back(all_pts_[k]);
+            }
+        }
+        std::vector<float> e9(pts.size() * 9);
+        direct_.Evaluate(pts, e9, DirectLight::kSky);
+        for (size_t q = 0; q < todo.size(); ++q) {
+            const size_t k = todo[q];
+            std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
+            if (slot_[k] >= n_gauss) {  // only control points lie on node edges
+                std::array<float, 9> rec;
+                std::copy(&e9[q * 9], &e9[q * 9] + 9, rec.begin());
+                sky_cache_.emplace(keys[k], rec);
+            }
+        }
+    }
+
     // Back to Gauss and control order, then to field values.
     void ToGaussAndControl(int n_gauss, int n_ctrl, bool control) {
         pts_.resize(size_t(n_gauss));
@@ -166,9 +230,10 @@ private:
     const int ng_, gc_, finest_, max_level_;
     DirectLight& direct_;
     ProbeCache probe_cache_;  // this chart's probes (node corners are shared)
+    std::unordered_map<ProbeKey, std::array<float, 9>, ProbeKeyHash> sky_cache_;
     std::vector<int> slot_;
     std::vector<ProbeKey> keys_;
-    std::vector<ReceiverPoint> all_pts_, pts_, cpts_;
+    std::vector<ReceiverPoint> all_pts_, pts_, cpts_, edge_pts_;
     std::vector<Vec3f> all_albedo_, albedo_, calb_;
     std::vector<float> e9_all_, e9_, ce9_;
 };
@@ -195,7 +260,16 @@ void Solver::RefineDirect(uint32_t chart) {
     // describes more than the light map can store, so refinement stops there.
     const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
     const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
-    DirectLight direct(scene_, opt_.settings, vis_, RayOffset(chart), opt_.scene_size);
+    // The lights' and the sky's rays start an eighth of a light-map texel off the surface
+    // (never closer than the proxy allows), from visibility points moved onto the real
+    // surface first (DirectLight::OnSurface, up to four texels under it). With rays leaving
+    // from under the surface, half a texel was needed; it lifted rays out of creases and folds
+    // narrower than that, which the reference sees dark (bench/RESULTS.md, "Issue 14
+    // (session 7)").
+    const float half_texel = RayOffset(chart);
+    DirectLight direct(scene_, opt_.settings, vis_,
+                       std::max(opt_.ray_offset, half_texel * kDirectOffset), opt_.scene_size,
+                       half_texel * DirectLight::kOriginReach);
     // The fixed levels (min_level, sky_level) are meant for a chart as large as the scene: a
     // chart 2^k times smaller starts k levels higher, so that node counts follow world size
     // (lucy's 449 small charts made a million nodes at M0 otherwise).
@@ -371,8 +445,9 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         if (!control)
             return;
         scale = std::max({scale, MaxAbs(sampler.ctrl_vals), float(reference_ * 0.02)});
-        const float err =
-            ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        float err = ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
+        if (err <= float(opt_.settings.tolerance) * scale && sampler.MissedShadowEdge(node))
+            err = scale;  // ranked as if the node missed by its largest value
         if (err > float(opt_.settings.tolerance) * scale)
             queue.push({err * std::ldexp(1.f, -2 * int(node.level)), n});
     };

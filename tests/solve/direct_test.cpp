@@ -53,11 +53,17 @@ TEST(DirectLight, PenumbraCloseToExact) {
     }
 }
 
-TEST(DirectLight, UniformSkyOnOpenPlane) {
+// A uniform sky of this radiance about +y, and nothing else.
+Scene SkyAlone(const Vec3d& radiance) {
     Scene scene;
     scene.sky.type = Sky::Type::Uniform;
-    scene.sky.radiance = {1, 2, 3};
+    scene.sky.radiance = radiance;
     scene.sky.up = {0, 1, 0};
+    return scene;
+}
+
+TEST(DirectLight, UniformSkyOnOpenPlane) {
+    const Scene scene = SkyAlone({1, 2, 3});
     VisibilityScene vis;
     std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
     std::vector<uint32_t> tri = {0, 1, 2};
@@ -70,6 +76,45 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
     // Unoccluded uniform sky over the upper hemisphere: E = pi L up.
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(e[size_t(3 * c + 1)], std::numbers::pi * (c + 1), 1e-3 * (c + 1));
     EXPECT_NEAR(e[0], 0, 0.05);
+}
+
+
+// The refinement's test for a shadow between a node's points: the light's centre hidden
+// from some points and seen from others.
+TEST(DirectLight, ShadowEdgeAmongPoints) {
+    OccluderScene s(16);
+    DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
+    auto at = [](float x) { return ReceiverPoint{{x, 0, 0}, {0, 1, 0}, {x, 0, 0}}; };
+    const std::vector<ReceiverPoint> across = {at(3), at(0), at(3.1f)};
+    const std::vector<ReceiverPoint> lit = {at(3), at(3.1f)}, hidden = {at(0), at(0.1f)};
+    EXPECT_TRUE(direct.ShadowEdgeAmong(across));
+    EXPECT_FALSE(direct.ShadowEdgeAmong(lit));
+    EXPECT_FALSE(direct.ShadowEdgeAmong(hidden));
+}
+
+// A visibility point a little under the surface (as the chord between geometry-image texels
+// runs under a convex bend) must see the sky from the surface above it, not from below it;
+// one deeper than the reach stays where it is and sees nothing.
+TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
+    const Scene scene = SkyAlone({1, 1, 1});
+    VisibilityScene vis;
+    // A floor y = 0 facing up (counter-clockwise seen from above), wide enough that no sky
+    // direction passes beside it from under it.
+    std::vector<float> floor = {-1e4f, 0, -1e4f, -1e4f, 0, 1e4f, 1e4f, 0, 1e4f, 1e4f, 0, -1e4f};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+    vis.AddTriangles(floor, tris, "floor");
+    vis.Commit();
+    const float offset = 1e-3f, reach = 0.05f;
+    DirectLight direct(scene, scene.solver, vis, offset, 10, reach);
+    auto sky_at = [&](float depth) {
+        std::vector<ReceiverPoint> pts = {{{0, -depth, 0}, {0, 1, 0}, {0, -depth, 0}}};
+        std::vector<float> e(9);
+        direct.Evaluate(pts, e);
+        return e[1];
+    };
+    EXPECT_NEAR(sky_at(0.02f), std::numbers::pi, 1e-3);   // under by 20 offsets: moved up
+    EXPECT_NEAR(sky_at(0.f), std::numbers::pi, 1e-3);     // on it: unchanged
+    EXPECT_NEAR(sky_at(0.2f), 0, 1e-6);                   // deeper than the reach: blocked
 }
 
 }  // namespace
