@@ -83,14 +83,11 @@ void WriteOutputs(const std::string& dir, const std::string& out_dir, uint64_t m
     exp.force = true;
     exp.tone_curve = "filmic";
     exp.lightmap = out_dir + "/lightmap.exr";
+    exp.lightmap_png = out_dir + "/lightmap.png";  // and in the .glb: shaded once for all
     exp.mesh = out_dir + "/baked.glb";
     exp.vertex_colors = out_dir + "/vertex_colors.ply";
     exp.stats = out_dir + "/stats.json";
     RunExportJob(exp);
-    ExportJobOptions png = exp;
-    png.lightmap = out_dir + "/lightmap.png";
-    png.mesh = png.vertex_colors = png.stats = png.irradiance = "";
-    RunExportJob(png);
 
     RenderJobOptions ren;
     ren.dir = dir;

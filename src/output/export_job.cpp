@@ -53,6 +53,8 @@ void CheckRequested(const ExportJobOptions& c) {
                    "or --stats");
     if (to_stdout > 1)
         UsageError("only one output can go to stdout ('-')");
+    if (!c.lightmap_png.empty() && c.lightmap.empty())
+        UsageError("{}: a light-map PNG companion needs the .exr light map", c.lightmap_png);
 }
 
 // Throws Error(Usage) when an output exists and force is not set (before anything is
@@ -62,6 +64,8 @@ void CheckFreshOutputs(const ExportJobOptions& c, const Atlas& atlas) {
     for (uint32_t p = 0; p < pages; ++p) {
         if (!c.lightmap.empty())
             CheckFresh(PagePath(c.lightmap, p, pages), c.force);
+        if (!c.lightmap_png.empty())
+            CheckFresh(PagePath(c.lightmap_png, p, pages), c.force);
         if (!c.irradiance.empty())
             CheckFresh(PagePath(c.irradiance, p, pages), c.force);
     }
@@ -148,7 +152,10 @@ void RunExportJob(const ExportJobOptions& c) {
         if (m.path.empty())
             continue;
         const auto t = Clock::now();
-        const auto files = WriteMapPages(view, atlas, m.path, m.content, c.maps);
+        MapWriteOptions mo = c.maps;
+        if (m.content == MapContent::Radiosity)
+            mo.png_path = c.lightmap_png;
+        const auto files = WriteMapPages(view, atlas, m.path, m.content, mo);
         seconds[m.key] = Since(t);
         j[m.key] = files;
         progress.Add(view.chart_count());
@@ -159,6 +166,8 @@ void RunExportJob(const ExportJobOptions& c) {
         MeshExportOptions me;
         me.glb_mode = c.glb_mode;
         me.tone = c.maps.tone;
+        for (uint32_t p = 0; !c.lightmap_png.empty() && p < atlas.pages.size(); ++p)
+            me.light_map_pngs.push_back(PagePath(c.lightmap_png, p, uint32_t(atlas.pages.size())));
         const auto st = WriteBakedMesh(view, atlas, c.mesh, me);
         seconds["mesh"] = Since(t);
         progress.Add(view.chart_count());

@@ -19,6 +19,9 @@ struct ExportJobOptions {
     std::string dir;  // solved bake directory
     // Outputs; empty: not written. "-" is stdout (at most one).
     std::string lightmap, irradiance, mesh, vertex_colors, stats;
+    // With an .exr lightmap: its PNG from the same texels, also embedded in a .glb mesh
+    // (the bake's outputs: the light map shaded and stitched once for all three).
+    std::string lightmap_png;
     AtlasOptions atlas;
     MapWriteOptions maps;    // EXR pixel type and compression; maps.tone for every output
     std::string tone_curve;  // its name, for the statistics

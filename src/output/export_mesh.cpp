@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "output/lightmap.h"
 #include "output/texel_stitch.h"
@@ -89,6 +90,16 @@ MeshExportStats WriteLinear(const BakeView& view, const Atlas& atlas, const std:
     return st;
 }
 
+// A whole file (a light-map page PNG written just before).
+static std::vector<uint8_t> ReadFileBytes(const std::string& path) {
+    auto in = io::InputStream::Open(path);
+    std::vector<uint8_t> bytes;
+    uint8_t chunk[1 << 16];
+    while (const size_t n = in->Read(chunk, sizeof(chunk)))
+        bytes.insert(bytes.end(), chunk, chunk + n);
+    return bytes;
+}
+
 MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::string& path,
                          const MeshExportOptions& opt) {
     io::GlbOptions go;
@@ -96,11 +107,20 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
     go.temp_dir = opt.temp_dir;
     io::GlbWriter glb(go);
     const uint32_t pages = uint32_t(atlas.pages.size());
-    const auto stitch = StitchForView(view, atlas, MapContent::Radiosity);
-    for (uint32_t p = 0; p < pages; ++p)
-        CHECK_EQ(glb.AddLightMapMaterial(EncodeLightMapPng(view, atlas, p, opt.tone, stitch.get()),
-                                         fmt::format("lightmap page {}", p + 1)),
-                 p);
+    if (!opt.light_map_pngs.empty()) {
+        CHECK_EQ(opt.light_map_pngs.size(), pages);
+        for (uint32_t p = 0; p < pages; ++p)
+            CHECK_EQ(glb.AddLightMapMaterial(ReadFileBytes(opt.light_map_pngs[p]),
+                                             fmt::format("lightmap page {}", p + 1)),
+                     p);
+    } else {
+        const auto stitch = StitchForView(view, atlas, MapContent::Radiosity);
+        for (uint32_t p = 0; p < pages; ++p)
+            CHECK_EQ(glb.AddLightMapMaterial(
+                         EncodeLightMapPng(view, atlas, p, opt.tone, stitch.get()),
+                         fmt::format("lightmap page {}", p + 1)),
+                     p);
+    }
     std::vector<uint32_t> order = AllCharts(view);
     std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
         return atlas.charts[a].page < atlas.charts[b].page;

@@ -30,6 +30,9 @@ struct MeshExportOptions {
     ToneMap tone;  // the light map embedded in a .glb
     io::PlyEncoding ply_encoding = io::PlyEncoding::BinaryLittleEndian;
     std::string temp_dir;  // spill files; empty: $TMPDIR or /tmp
+    // The light map's pages already written as PNG with `tone` (WriteMapPages' png_path):
+    // embedded as they are instead of shading and encoding the map again.
+    std::vector<std::string> light_map_pngs;
 };
 
 struct MeshExportStats {

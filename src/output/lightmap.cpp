@@ -225,6 +225,10 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
                    content == MapContent::Radiosity ? " or .png" : "");
     if (png && content != MapContent::Radiosity)
         UsageError("{}: vector irradiance maps are written as OpenEXR (.exr) only", path);
+    const bool png_too = !options.png_path.empty();
+    if (png_too && (png || content != MapContent::Radiosity || Extension(options.png_path) != ".png"))
+        UsageError("{}: a PNG companion needs a radiosity .exr map and a .png name",
+                   options.png_path);
     const uint32_t pages = uint32_t(atlas.pages.size());
     if (path == "-" && pages > 1)
         UsageError("the atlas has {} pages; give a file name instead of '-'", pages);
@@ -251,15 +255,32 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
                 {"mebakePage", fmt::format("{} of {}", p + 1, pages)},
                 {"mebakeGutter", std::to_string(atlas.gutter)}};
             io::ExrWriter w(file, int(pg.width), int(pg.height), MapChannelNames(content), eo);
+            std::unique_ptr<io::OutputStream> png_out;
+            std::unique_ptr<io::PngWriter> png_w;
+            if (png_too) {
+                png_out = io::OutputStream::Open(PagePath(options.png_path, p, pages));
+                png_w = std::make_unique<io::PngWriter>(*png_out, int(pg.width), int(pg.height), 3);
+            }
+            std::vector<uint8_t> bytes;
             ComputePage(view, atlas, p, content,
                         [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
                             w.WriteRows(pixels, int(rows));
+                            if (png_w) {  // the bytes WritePngPage writes
+                                ToneMapBand(pixels, options.tone, bytes);
+                                png_w->WriteRows(bytes, int(rows));
+                            }
                         },
                         64, 0, stitch.get());
             w.Commit();
+            if (png_w) {
+                png_w->Finish();
+                png_out->Commit();
+            }
         }
         written.push_back(file);
     }
+    for (uint32_t p = 0; png_too && p < pages; ++p)
+        written.push_back(PagePath(options.png_path, p, pages));
     return written;
 }
 

@@ -71,12 +71,15 @@ struct MapWriteOptions {
     io::ExrPixelType exr_type = io::ExrPixelType::Half;
     io::ExrCompression compression = io::ExrCompression::Zip;
     ToneMap tone;  // PNG only
+    // A Radiosity .exr map also written as PNG to this path (PagePath per page) from the
+    // same shaded texels: one shading and one stitch for both (the bake's light map).
+    std::string png_path;
 };
 
 // Writes every page to PagePath(path, ...), as OpenEXR (".exr") or, for Radiosity, 8-bit
 // sRGB PNG (".png"), with the seams' texels stitched when the view is. Returns the paths
-// written. Throws Error(Usage) for another extension,
-// or for "-" with more than one page.
+// written (options.png_path's pages after the main ones). Throws Error(Usage) for another
+// extension, or for "-" with more than one page.
 std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
                                        const std::string& path, MapContent content,
                                        const MapWriteOptions& options);

@@ -8,6 +8,7 @@
 #include "io/mesh_format.h"
 #include "io/png_writer.h"
 #include "output/export_mesh.h"
+#include "output/lightmap.h"
 #include "output/vertex_colors.h"
 
 #include <gtest/gtest.h>
@@ -59,6 +60,35 @@ protected:
     BakeView view_;
     Atlas atlas_;
 };
+
+// The bake's path: the light map shaded once, written as EXR and PNG, and the PNG pages
+// embedded in the .glb as they are: the same bytes as each written on its own.
+TEST_F(ExportTest, LightMapPngBesideTheExrAndInTheGlbAreTheSameBytes) {
+    const uint32_t pages = uint32_t(atlas_.pages.size());
+    MapWriteOptions mo;
+    mo.png_path = dir_ + "/both.png";
+    const auto files = WriteMapPages(view_, atlas_, dir_ + "/both.exr", MapContent::Radiosity, mo);
+    ASSERT_EQ(files.size(), 2u * pages);
+    EXPECT_EQ(files.back(), PagePath(mo.png_path, pages - 1, pages));
+    WriteMapPages(view_, atlas_, dir_ + "/alone.png", MapContent::Radiosity, MapWriteOptions{});
+    WriteMapPages(view_, atlas_, dir_ + "/alone.exr", MapContent::Radiosity, MapWriteOptions{});
+    for (uint32_t p = 0; p < pages; ++p) {
+        const auto png = Slurp(PagePath(mo.png_path, p, pages));
+        EXPECT_GT(png.size(), 8u);
+        EXPECT_EQ(png, Slurp(PagePath(dir_ + "/alone.png", p, pages)));
+        EXPECT_EQ(Slurp(PagePath(dir_ + "/both.exr", p, pages)),
+                  Slurp(PagePath(dir_ + "/alone.exr", p, pages)));
+    }
+    MeshExportOptions encoded, embedded;
+    for (uint32_t p = 0; p < pages; ++p)
+        embedded.light_map_pngs.push_back(PagePath(mo.png_path, p, pages));
+    WriteBakedMesh(view_, atlas_, dir_ + "/encoded.glb", encoded);
+    WriteBakedMesh(view_, atlas_, dir_ + "/embedded.glb", embedded);
+    EXPECT_EQ(Slurp(dir_ + "/encoded.glb"), Slurp(dir_ + "/embedded.glb"));
+    // A PNG companion is for a radiosity EXR only.
+    EXPECT_THROW(WriteMapPages(view_, atlas_, dir_ + "/x.png", MapContent::Radiosity, mo), Error);
+    EXPECT_THROW(WriteMapPages(view_, atlas_, dir_ + "/e.exr", MapContent::Irradiance, mo), Error);
+}
 
 TEST_F(ExportTest, GlbWithEmbeddedLightMap) {
     const std::string path = dir_ + "/baked.glb";
