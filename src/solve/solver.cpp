@@ -205,6 +205,14 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 t.area = area;
                 t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
                 t.db = area > 0 ? db / area : Vec3f{};
+                // The region's normal cone (link_refine.h), from its finest samples'.
+                NormalCone cone{t.nrm, 0};
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    if (k.area > 0)
+                        cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                }
+                t.cone = cone.angle;
             }
         }
     }
@@ -283,8 +291,15 @@ public:
             // A receiver node already smaller than the finest emitter samples gains nothing
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
-            if (small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound ||
-                tolerance_.Accepts(lk.node, LinkIrradianceBound(et.db_max, et.area, dist))) {
+            bool accept = small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound;
+            if (!accept && tolerance_.enabled()) {
+                // The error-driven stop, with the cosines at both ends (link_refine.h).
+                const double b = Bound(lk.node, et);
+                if (b <= 0)
+                    continue;  // the sides face away: no light can pass
+                accept = tolerance_.Accepts(lk.node, b);
+            }
+            if (accept) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
                 EvaluateLink(lk.node, em, lk, ls);
@@ -313,6 +328,57 @@ private:
         uint32_t texel;
         Vec3f contribution;  // E per unit radiosity of the texel
     };
+
+    // The cone of the normals GaussPoints() gives in node n: the level-gl texels its
+    // bilinear samples blend (one ring beyond the node), widened where samples within half
+    // a texel of the square's edge are extrapolated (weights in [-0.5, 1.5] per axis: the
+    // sum of |weights| is at most 4, so the blend's tangent part grows to 4 sin theta
+    // against an axial part of at least 2.5 cos theta - 1.5). Cached per node.
+    NormalCone NodeCone(size_t n) {
+        if (node_cones_.size() != field_.node_count())
+            node_cones_.assign(field_.node_count(), NormalCone{Vec3f{}, -1.f});
+        NormalCone& cached = node_cones_[n];
+        if (cached.angle >= 0)
+            return cached;
+        const QuadNode node = field_.node(n);
+        const int gl = std::min(std::max(std::min(finest_, int(node.level) + 2), 1), finest_);
+        const int nn = 1 << gl;
+        auto range = [&](double lo, double hi, int* a, int* b) {
+            const double x0 = lo * nn - 0.5, x1 = hi * nn - 0.5;
+            *a = nn > 1 ? std::clamp(int(std::floor(x0)), 0, nn - 2) : 0;
+            *b = nn > 1 ? std::clamp(int(std::floor(x1)), 0, nn - 2) + 1 : 0;
+            return x0 < 0 || x1 > nn - 1;  // extrapolated
+        };
+        int i0, i1, j0, j1;
+        bool edge = range(node.U(0), node.U(1), &i0, &i1);
+        edge = range(node.V(0), node.V(1), &j0, &j1) || edge;
+        cone_normals_.clear();
+        Vec3f sum{};
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+                cone_normals_.push_back(sc_.geometry.At(gl, uint32_t(i), uint32_t(j)).normal);
+                sum += cone_normals_.back();
+            }
+        NormalCone cone;  // any direction
+        if (Length(sum) > 0)
+            cone = ConeAround(Normalize(sum), cone_normals_.data(), cone_normals_.size());
+        if (edge && cone.angle < std::numbers::pi / 2) {
+            const double axial = 2.5 * std::cos(cone.angle) - 1.5;
+            cone.angle = axial > 0 ? float(std::atan2(4 * std::sin(cone.angle), axial))
+                                   : float(std::numbers::pi);
+        }
+        cached = cone;
+        return cone;
+    }
+
+    // The error-driven stop's bound for a link (receiver node n, emitter region et).
+    double Bound(size_t n, const Emitter::Texel& et) {
+        Vec3f rc;
+        float rr;
+        NodeBounds(field_.node(n), &rc, &rr);
+        return ConeLinkBound(et.db_max, Luminance(et.db) * et.area, {rc, rr, NodeCone(n)},
+                             {et.pos, et.radius, {et.nrm, et.cone}});
+    }
 
     // Receiver node bounds from the geometry pyramid.
     void NodeBounds(const QuadNode& node, Vec3f* center, float* radius) const {
@@ -420,6 +486,8 @@ private:
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
     size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
+    std::vector<NormalCone> node_cones_;  // NodeCone(), angle < 0: not yet computed
+    std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
     std::vector<Vec3f> albedo_;
     std::vector<Pair> pairs_;
