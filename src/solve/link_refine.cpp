@@ -45,6 +45,28 @@ NormalCone Enclose(const Vec3f& axis, const NormalCone& a, const NormalCone& b) 
     return {axis, w >= kHalfPi ? float(std::numbers::pi) : float(w) + 1e-6f};
 }
 
+void SphereBuilder::Get(const Vec3f& fallback_c, float fallback_r, Vec3f* c, float* r) const {
+    *c = fallback_c;
+    *r = fallback_r;
+    if (parts_.empty())
+        return;
+    Vec3f lo = parts_[0].c, hi = parts_[0].c;
+    for (const Part& p : parts_) {
+        const Vec3f e(p.r, p.r, p.r);
+        lo = Min(lo, p.c - e);
+        hi = Max(hi, p.c + e);
+    }
+    const Vec3f mid = (lo + hi) * 0.5f;
+    float rad = 0;
+    for (const Part& p : parts_)
+        rad = std::max(rad, Length(p.c - mid) + p.r);
+    rad *= 1 + 1e-6f;  // rounding
+    if (rad < fallback_r) {
+        *c = mid;
+        *r = rad;
+    }
+}
+
 double ConeLinkBound(double db_max, double power, const LinkSide& r, const LinkSide& e) {
     // Touching or not: the band of directions both sides allow.
     double band = 1;

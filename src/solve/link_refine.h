@@ -56,6 +56,22 @@ struct LinkSide {
     NormalCone cone;
 };
 
+// A sphere around a few spheres (points: radius 0): centred on their bounding box, often
+// much tighter than the geometry pyramid's (centred on the surface point at the texel's
+// middle). Get() keeps the fallback sphere when that is not larger.
+class SphereBuilder {
+public:
+    void Add(const Vec3f& c, float r) { parts_.push_back({c, r}); }
+    void Get(const Vec3f& fallback_c, float fallback_r, Vec3f* c, float* r) const;
+
+private:
+    struct Part {
+        Vec3f c;
+        float r;
+    };
+    std::vector<Part> parts_;
+};
+
 // Upper bound on n . E, for every normal n of the receiver's cone, that an emitter region
 // (largest radiosity db_max, power = integral of its radiosity over its area) gives at any
 // receiver point, with the cosines at

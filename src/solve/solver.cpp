@@ -147,6 +147,8 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.vis = g.vis_point;
             t.area = g.area;
             t.radius = g.radius;
+            t.hull = g.position;
+            t.hull_radius = g.radius;
             if (g.area <= 0)
                 continue;
             // The texel's mean unshot E (2 x 2 Gauss points, exact up to cubics): quadtree
@@ -213,6 +215,17 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                         cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
                 }
                 t.cone = cone.angle;
+                // And its tight sphere: around the children's and their sample points (a
+                // region is evaluated at its children's positions, virtual ones included).
+                SphereBuilder hull;
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    if (k.area > 0) {
+                        hull.Add(k.hull, k.hull_radius);
+                        hull.Add(k.pos, 0);
+                    }
+                }
+                hull.Get(t.pos, t.radius, &t.hull, &t.hull_radius);
             }
         }
     }
@@ -329,18 +342,21 @@ private:
         Vec3f contribution;  // E per unit radiosity of the texel
     };
 
-    // The cone of the normals GaussPoints() gives in node n: the level-gl texels its
-    // bilinear samples blend (one ring beyond the node), widened where samples within half
-    // a texel of the square's edge are extrapolated (weights in [-0.5, 1.5] per axis: the
-    // sum of |weights| is at most 4, so the blend's tangent part grows to 4 sin theta
-    // against an axial part of at least 2.5 cos theta - 1.5). Cached per node.
-    NormalCone NodeCone(size_t n) {
-        if (node_cones_.size() != field_.node_count())
-            node_cones_.assign(field_.node_count(), NormalCone{Vec3f{}, -1.f});
-        NormalCone& cached = node_cones_[n];
-        if (cached.angle >= 0)
+    // What the error-driven stop knows of node n's receiver points (cached per node): the
+    // cone of the normals GaussPoints() gives there, from the level-gl texels its bilinear
+    // samples blend (one ring beyond the node), widened where samples within half a texel
+    // of the square's edge are extrapolated (weights in [-0.5, 1.5] per axis: the sum of
+    // |weights| is at most 4, so the blend's tangent part grows to 4 sin theta against an
+    // axial part of at least 2.5 cos theta - 1.5); and a sphere around the node's real
+    // points and the ring's sample points, when tighter than NodeBounds()'.
+    const LinkSide& NodeShape(size_t n) {
+        if (node_shapes_.size() != field_.node_count())
+            node_shapes_.assign(field_.node_count(), LinkSide{Vec3f{}, -1.f, {}});
+        LinkSide& cached = node_shapes_[n];
+        if (cached.radius >= 0)
             return cached;
         const QuadNode node = field_.node(n);
+        NodeBounds(node, &cached.center, &cached.radius);
         const int gl = std::min(std::max(std::min(finest_, int(node.level) + 2), 1), finest_);
         const int nn = 1 << gl;
         auto range = [&](double lo, double hi, int* a, int* b) {
@@ -354,10 +370,17 @@ private:
         edge = range(node.V(0), node.V(1), &j0, &j1) || edge;
         cone_normals_.clear();
         Vec3f sum{};
+        SphereBuilder hull;
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) {
-                cone_normals_.push_back(sc_.geometry.At(gl, uint32_t(i), uint32_t(j)).normal);
-                sum += cone_normals_.back();
+                const auto& g = sc_.geometry.At(gl, uint32_t(i), uint32_t(j));
+                cone_normals_.push_back(g.normal);
+                sum += g.normal;
+                // Texels inside the node bring their real points, the ring its samples.
+                const double u = (i + 0.5) / nn, v = (j + 0.5) / nn;
+                const bool inside =
+                    u > node.U(0) && u < node.U(1) && v > node.V(0) && v < node.V(1);
+                hull.Add(g.position, inside ? g.radius : 0.f);
             }
         NormalCone cone;  // any direction
         if (Length(sum) > 0)
@@ -367,17 +390,16 @@ private:
             cone.angle = axial > 0 ? float(std::atan2(4 * std::sin(cone.angle), axial))
                                    : float(std::numbers::pi);
         }
-        cached = cone;
-        return cone;
+        cached.cone = cone;
+        if (int(node.level) + 2 <= finest_)  // the texels cover the node: the sphere holds
+            hull.Get(cached.center, cached.radius, &cached.center, &cached.radius);
+        return cached;
     }
 
     // The error-driven stop's bound for a link (receiver node n, emitter region et).
     double Bound(size_t n, const Emitter::Texel& et) {
-        Vec3f rc;
-        float rr;
-        NodeBounds(field_.node(n), &rc, &rr);
-        return ConeLinkBound(et.db_max, Luminance(et.db) * et.area, {rc, rr, NodeCone(n)},
-                             {et.pos, et.radius, {et.nrm, et.cone}});
+        return ConeLinkBound(et.db_max, Luminance(et.db) * et.area, NodeShape(n),
+                             {et.hull, et.hull_radius, {et.nrm, et.cone}});
     }
 
     // Receiver node bounds from the geometry pyramid.
@@ -486,7 +508,7 @@ private:
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
     size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
-    std::vector<NormalCone> node_cones_;  // NodeCone(), angle < 0: not yet computed
+    std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
     std::vector<Vec3f> albedo_;

@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <numbers>
 
 namespace mebake::solve {
 namespace {
@@ -94,6 +95,37 @@ TEST(LinkRefine, ConeBoundHoldsForCosinesAtBothEnds) {
     EXPECT_GT(near, 60);    // touching pairs are tested too
     EXPECT_GT(small, 150);  // and there the bound is far below the half-space's 1
     EXPECT_GT(lit, 20);     // with light to bound
+}
+
+// The tight sphere holds every sphere it was built from and is never larger than the
+// fallback; for a curved strip (the case it is for) it is much smaller than a sphere
+// centred on the strip's middle point.
+TEST(LinkRefine, TightSphereHoldsItsPartsAndIsTighter) {
+    Rng rnd;
+    for (int k = 0; k < 200; ++k) {
+        SphereBuilder b;
+        std::vector<std::pair<Vec3d, double>> parts;
+        const int n = 1 + int(rnd() * 36);
+        for (int p = 0; p < n; ++p) {
+            parts.push_back({rnd.Dir() * (3 * rnd()), rnd() < 0.3 ? 0.0 : rnd()});
+            b.Add(Vec3f(parts.back().first), float(parts.back().second));
+        }
+        Vec3f c;
+        float r;
+        b.Get(Vec3f(0, 0, 0), 100.f, &c, &r);
+        EXPECT_LE(r, 100.f);
+        for (const auto& [pc, pr] : parts)
+            EXPECT_LE(Length(pc - Vec3d(c)) + pr, double(r) * (1 + 1e-6)) << "k " << k;
+    }
+    // A half circle of radius 1 around the origin, its middle point at (0, 1, 0): the
+    // sphere centred there needs radius sqrt(2), the tight one about 1.
+    SphereBuilder arc;
+    for (int a = 0; a <= 32; ++a)
+        arc.Add(Vec3f(float(std::cos(a * std::numbers::pi / 32)), float(std::sin(a * std::numbers::pi / 32)), 0), 0);
+    Vec3f c;
+    float r;
+    arc.Get(Vec3f(0, 1, 0), float(std::sqrt(2.0)), &c, &r);
+    EXPECT_LT(r, 1.2f);
 }
 
 struct BoxRun {
