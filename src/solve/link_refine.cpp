@@ -9,12 +9,80 @@
 
 namespace mebake::solve {
 
-double LinkIrradianceBound(double db_max, double area, double gap) {
-    // |E| <= B_max x (projected solid angle) / pi; the solid angle of a region within the
-    // receiver's half-space is at most 2 pi, and at most A / d^2 when d > 0.
-    const double solid = gap > 0 ? std::min(2 * std::numbers::pi, area / (gap * gap))
-                                 : 2 * std::numbers::pi;
-    return db_max * solid / std::numbers::pi;
+namespace {
+
+constexpr double kHalfPi = std::numbers::pi / 2;
+
+double AngleBetween(const Vec3f& a, const Vec3f& b) {
+    return std::acos(std::clamp(double(Dot(a, b)), -1.0, 1.0));
+}
+
+// The largest cosine between a direction within `spread` of `dir` and a normal of `cone`.
+double MaxCosine(const Vec3f& dir, double spread, const NormalCone& cone) {
+    if (cone.angle >= kHalfPi)
+        return 1;
+    const double gap = AngleBetween(dir, cone.axis) - cone.angle - spread;
+    return gap <= 0 ? 1 : gap >= kHalfPi ? 0 : std::cos(gap);
+}
+
+}  // namespace
+
+NormalCone ConeAround(const Vec3f& axis, const Vec3f* normals, size_t count) {
+    NormalCone c{axis, 0};
+    for (size_t k = 0; k < count; ++k)
+        if (Dot(normals[k], normals[k]) > 0)
+            c.angle = std::max(c.angle, float(AngleBetween(axis, Normalize(normals[k]))));
+    if (c.angle >= kHalfPi)
+        c.angle = float(std::numbers::pi);
+    return c;
+}
+
+NormalCone Enclose(const Vec3f& axis, const NormalCone& a, const NormalCone& b) {
+    const double wa = a.angle + AngleBetween(axis, a.axis);
+    const double wb = b.angle + AngleBetween(axis, b.axis);
+    const double w = std::max(wa, wb);
+    // Rounding in acos: widen by a hair so a child's normal never falls outside.
+    return {axis, w >= kHalfPi ? float(std::numbers::pi) : float(w) + 1e-6f};
+}
+
+void SphereBuilder::Get(const Vec3f& fallback_c, float fallback_r, Vec3f* c, float* r) const {
+    *c = fallback_c;
+    *r = fallback_r;
+    if (parts_.empty())
+        return;
+    Vec3f lo = parts_[0].c, hi = parts_[0].c;
+    for (const Part& p : parts_) {
+        const Vec3f e(p.r, p.r, p.r);
+        lo = Min(lo, p.c - e);
+        hi = Max(hi, p.c + e);
+    }
+    const Vec3f mid = (lo + hi) * 0.5f;
+    float rad = 0;
+    for (const Part& p : parts_)
+        rad = std::max(rad, Length(p.c - mid) + p.r);
+    rad *= 1 + 1e-6f;  // rounding
+    if (rad < fallback_r) {
+        *c = mid;
+        *r = rad;
+    }
+}
+
+double ConeLinkBound(double db_max, double power, const LinkSide& r, const LinkSide& e) {
+    // Touching or not: the band of directions both sides allow.
+    double band = 1;
+    if (r.cone.angle < kHalfPi && e.cone.angle < kHalfPi) {
+        const double psi = r.cone.angle + e.cone.angle + AngleBetween(r.cone.axis, e.cone.axis);
+        band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
+    }
+    const Vec3f d = e.center - r.center;
+    const double dist = Length(d), gap = dist - r.radius - e.radius;
+    if (gap <= 0)
+        return db_max * band;
+    const Vec3f u = d / float(dist);
+    const double alpha = std::asin(std::min(1.0, (double(r.radius) + e.radius) / dist));
+    const double far = power / (std::numbers::pi * gap * gap) * MaxCosine(u, alpha, r.cone) *
+                       MaxCosine(-u, alpha, e.cone);
+    return std::min(db_max * band, far);
 }
 
 double NodeIrradiance(const ChartField& field, size_t node) {

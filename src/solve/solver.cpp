@@ -147,6 +147,8 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.vis = g.vis_point;
             t.area = g.area;
             t.radius = g.radius;
+            t.hull = g.position;
+            t.hull_radius = g.radius;
             if (g.area <= 0)
                 continue;
             // The texel's mean unshot E (2 x 2 Gauss points, exact up to cubics): quadtree
@@ -205,6 +207,25 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 t.area = area;
                 t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
                 t.db = area > 0 ? db / area : Vec3f{};
+                // The region's normal cone (link_refine.h), from its finest samples'.
+                NormalCone cone{t.nrm, 0};
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    if (k.area > 0)
+                        cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                }
+                t.cone = cone.angle;
+                // And its tight sphere: around the children's and their sample points (a
+                // region is evaluated at its children's positions, virtual ones included).
+                SphereBuilder hull;
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    if (k.area > 0) {
+                        hull.Add(k.hull, k.hull_radius);
+                        hull.Add(k.pos, 0);
+                    }
+                }
+                hull.Get(t.pos, t.radius, &t.hull, &t.hull_radius);
             }
         }
     }
@@ -283,8 +304,15 @@ public:
             // A receiver node already smaller than the finest emitter samples gains nothing
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
-            if (small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound ||
-                tolerance_.Accepts(lk.node, LinkIrradianceBound(et.db_max, et.area, dist))) {
+            bool accept = small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound;
+            if (!accept && tolerance_.enabled()) {
+                // The error-driven stop, with the cosines at both ends (link_refine.h).
+                const double b = Bound(lk.node, et);
+                if (b <= 0)
+                    continue;  // the sides face away: no light can pass
+                accept = tolerance_.Accepts(lk.node, b);
+            }
+            if (accept) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
                 EvaluateLink(lk.node, em, lk, ls);
@@ -313,6 +341,66 @@ private:
         uint32_t texel;
         Vec3f contribution;  // E per unit radiosity of the texel
     };
+
+    // What the error-driven stop knows of node n's receiver points (cached per node): the
+    // cone of the normals GaussPoints() gives there, from the level-gl texels its bilinear
+    // samples blend (one ring beyond the node), widened where samples within half a texel
+    // of the square's edge are extrapolated (weights in [-0.5, 1.5] per axis: the sum of
+    // |weights| is at most 4, so the blend's tangent part grows to 4 sin theta against an
+    // axial part of at least 2.5 cos theta - 1.5); and a sphere around the node's real
+    // points and the ring's sample points, when tighter than NodeBounds()'.
+    const LinkSide& NodeShape(size_t n) {
+        if (node_shapes_.size() != field_.node_count())
+            node_shapes_.assign(field_.node_count(), LinkSide{Vec3f{}, -1.f, {}});
+        LinkSide& cached = node_shapes_[n];
+        if (cached.radius >= 0)
+            return cached;
+        const QuadNode node = field_.node(n);
+        NodeBounds(node, &cached.center, &cached.radius);
+        const int gl = std::min(std::max(std::min(finest_, int(node.level) + 2), 1), finest_);
+        const int nn = 1 << gl;
+        auto range = [&](double lo, double hi, int* a, int* b) {
+            const double x0 = lo * nn - 0.5, x1 = hi * nn - 0.5;
+            *a = nn > 1 ? std::clamp(int(std::floor(x0)), 0, nn - 2) : 0;
+            *b = nn > 1 ? std::clamp(int(std::floor(x1)), 0, nn - 2) + 1 : 0;
+            return x0 < 0 || x1 > nn - 1;  // extrapolated
+        };
+        int i0, i1, j0, j1;
+        bool edge = range(node.U(0), node.U(1), &i0, &i1);
+        edge = range(node.V(0), node.V(1), &j0, &j1) || edge;
+        cone_normals_.clear();
+        Vec3f sum{};
+        SphereBuilder hull;
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+                const auto& g = sc_.geometry.At(gl, uint32_t(i), uint32_t(j));
+                cone_normals_.push_back(g.normal);
+                sum += g.normal;
+                // Texels inside the node bring their real points, the ring its samples.
+                const double u = (i + 0.5) / nn, v = (j + 0.5) / nn;
+                const bool inside =
+                    u > node.U(0) && u < node.U(1) && v > node.V(0) && v < node.V(1);
+                hull.Add(g.position, inside ? g.radius : 0.f);
+            }
+        NormalCone cone;  // any direction
+        if (Length(sum) > 0)
+            cone = ConeAround(Normalize(sum), cone_normals_.data(), cone_normals_.size());
+        if (edge && cone.angle < std::numbers::pi / 2) {
+            const double axial = 2.5 * std::cos(cone.angle) - 1.5;
+            cone.angle = axial > 0 ? float(std::atan2(4 * std::sin(cone.angle), axial))
+                                   : float(std::numbers::pi);
+        }
+        cached.cone = cone;
+        if (int(node.level) + 2 <= finest_)  // the texels cover the node: the sphere holds
+            hull.Get(cached.center, cached.radius, &cached.center, &cached.radius);
+        return cached;
+    }
+
+    // The error-driven stop's bound for a link (receiver node n, emitter region et).
+    double Bound(size_t n, const Emitter::Texel& et) {
+        return ConeLinkBound(et.db_max, Luminance(et.db) * et.area, NodeShape(n),
+                             {et.hull, et.hull_radius, {et.nrm, et.cone}});
+    }
 
     // Receiver node bounds from the geometry pyramid.
     void NodeBounds(const QuadNode& node, Vec3f* center, float* radius) const {
@@ -420,6 +508,8 @@ private:
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
     size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
+    std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
+    std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
     std::vector<Vec3f> albedo_;
     std::vector<Pair> pairs_;

@@ -151,6 +151,9 @@ private:
             float radius = 0;
             Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
             float db_max = 0;  // largest luminance of db within the texel
+            float cone = 0;    // every sampled normal within lies within this angle of nrm
+            Vec3f hull;        // a tight sphere around the texel's real points and samples
+            float hull_radius = 0;
         };
         uint32_t chart = 0;
         std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
