@@ -107,8 +107,14 @@ TEST(LinkRefine, TightSphereHoldsItsPartsAndIsTighter) {
         std::vector<std::pair<Vec3d, double>> parts;
         const int n = 1 + int(rnd() * 36);
         for (int p = 0; p < n; ++p) {
-            parts.push_back({rnd.Dir() * (3 * rnd()), rnd() < 0.3 ? 0.0 : rnd()});
-            b.Add(Vec3f(parts.back().first), float(parts.back().second));
+            // One draw per statement: the same parts whatever order a compiler evaluates
+            // operands in; kept as the floats the builder gets.
+            const Vec3d dir = rnd.Dir();
+            const double dist = 3 * rnd();
+            const double radius = rnd() < 0.3 ? 0.0 : rnd();
+            const Vec3f pc(dir * dist);
+            parts.push_back({Vec3d(pc), double(float(radius))});
+            b.Add(pc, float(radius));
         }
         Vec3f c;
         float r;
