@@ -170,7 +170,7 @@ private:
     // chart coordinates and geometry level, so the same value): each is traced once per
     // chart and kept by its exact coordinates. A third fewer sky rays where GatherSky tests.
     void SkyShared(const QuadNode& node, int gl, int n_gauss) {
-        std::vector<size_t> todo;
+        std::vector<size_t> uncached;
         std::vector<ReceiverPoint> pts;
         std::vector<ProbeKey> keys(slot_.size());
         for (size_t k = 0; k < slot_.size(); ++k) {
@@ -180,14 +180,14 @@ private:
             if (it != sky_cache_.end()) {
                 std::copy(it->second.begin(), it->second.end(), &e9_all_[k * 9]);
             } else {
-                todo.push_back(k);
+                uncached.push_back(k);
                 pts.push_back(all_pts_[k]);
             }
         }
         std::vector<float> e9(pts.size() * 9);
         direct_.Evaluate(pts, e9, DirectLight::kSky);
-        for (size_t q = 0; q < todo.size(); ++q) {
-            const size_t k = todo[q];
+        for (size_t q = 0; q < uncached.size(); ++q) {
+            const size_t k = uncached[q];
             std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
             if (slot_[k] >= n_gauss) {  // only control points lie on node edges
                 std::array<float, 9> rec;
