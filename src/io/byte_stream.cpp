@@ -217,4 +217,13 @@ void OutputStream::Commit() {
     committed_ = true;
 }
 
+std::vector<uint8_t> ReadWholeFile(const std::string& path) {
+    auto in = InputStream::Open(path);
+    std::vector<uint8_t> bytes;
+    uint8_t buf[65536];
+    for (size_t n; (n = in->Read(buf, sizeof(buf))) > 0;)
+        bytes.insert(bytes.end(), buf, buf + n);
+    return bytes;
+}
+
 }  // namespace mebake::io

@@ -59,6 +59,9 @@ private:
     uint64_t size_hint_ = 0;
 };
 
+// Every byte of `path` (or stdin for "-"). Throws Error(Io) naming the path.
+std::vector<uint8_t> ReadWholeFile(const std::string& path);
+
 class OutputStream {
 public:
     // "-" writes to stdout; otherwise to a temporary file beside `path` that Commit()

@@ -223,12 +223,7 @@ PngImage DecodePng(std::span<const uint8_t> bytes, const std::string& name) {
 }
 
 PngImage ReadPng(const std::string& path) {
-    auto in = InputStream::Open(path);
-    std::vector<uint8_t> bytes;
-    uint8_t buf[65536];
-    for (size_t n; (n = in->Read(buf, sizeof(buf))) > 0;)
-        bytes.insert(bytes.end(), buf, buf + n);
-    return DecodePng(bytes, in->name());
+    return DecodePng(ReadWholeFile(path), path == "-" ? "<stdin>" : path);
 }
 
 }  // namespace mebake::io

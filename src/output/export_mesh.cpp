@@ -90,16 +90,6 @@ MeshExportStats WriteLinear(const BakeView& view, const Atlas& atlas, const std:
     return st;
 }
 
-// A whole file (a light-map page PNG written just before).
-static std::vector<uint8_t> ReadFileBytes(const std::string& path) {
-    auto in = io::InputStream::Open(path);
-    std::vector<uint8_t> bytes;
-    uint8_t chunk[1 << 16];
-    while (const size_t n = in->Read(chunk, sizeof(chunk)))
-        bytes.insert(bytes.end(), chunk, chunk + n);
-    return bytes;
-}
-
 MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::string& path,
                          const MeshExportOptions& opt) {
     io::GlbOptions go;
@@ -110,7 +100,7 @@ MeshExportStats WriteGlb(const BakeView& view, const Atlas& atlas, const std::st
     if (!opt.light_map_pngs.empty()) {
         CHECK_EQ(opt.light_map_pngs.size(), pages);
         for (uint32_t p = 0; p < pages; ++p)
-            CHECK_EQ(glb.AddLightMapMaterial(ReadFileBytes(opt.light_map_pngs[p]),
+            CHECK_EQ(glb.AddLightMapMaterial(io::ReadWholeFile(opt.light_map_pngs[p]),
                                              fmt::format("lightmap page {}", p + 1)),
                      p);
     } else {
