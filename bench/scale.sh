@@ -4,8 +4,11 @@
 # `mebake export` (light map + stats), each under /usr/bin/time -v.
 #
 #   bash bench/scale.sh [--sizes "100000 1000000 ..."] [--memory 2G] [--timeout S] [--work DIR]
-#                       [--no-results]
+#                       [--no-results] [--stages "ingest solve export"] [--keep]
 #
+# --stages runs only those stages (a size whose ingest is not among them reuses WORK/sN.mebake
+# from an earlier --keep run, so a long ingest and solve need not be repeated to re-measure
+# the export with another binary); --keep leaves the bake directory in WORK.
 # --memory is passed to every stage (default: the stages' own default). Each row records
 # wall and CPU seconds (user + sys), peak RSS and the 1-min load average when the stage
 # started; disk.tsv the bake directory's size after export.
@@ -24,6 +27,8 @@ WORK="$ROOT/build/bench-scale"
 RESULTS=1
 TIMEOUT=7200
 MEMORY=()
+STAGES="ingest solve export"
+KEEP=0
 CMD="bash bench/scale.sh$(printf " %q" "$@")"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -32,6 +37,8 @@ while [ $# -gt 0 ]; do
     --timeout) TIMEOUT="$2"; shift 2 ;;
     --memory) MEMORY=(--memory "$2"); shift 2 ;;
     --no-results) RESULTS=0; shift ;;
+    --stages) STAGES="$2"; shift 2 ;;
+    --keep) KEEP=1; shift ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -58,20 +65,31 @@ measure() {  # measure N STAGE CMD... : appends a row (wall and CPU seconds, pea
   echo "$n $stage: ${wall}s (cpu ${cpu}s, load $load), $((rss / 1024)) MiB, $st" >&2
 }
 
+wants() { case " $STAGES " in *" $1 "*) return 0 ;; *) return 1 ;; esac; }
+last_ok() { [ "$(tail -1 "$TSV" | cut -f5)" = ok ]; }
+
 for n in $SIZES; do
   d="$WORK/s$n.mebake"
-  rm -rf "$d"
-  measure "$n" ingest bash -c "'$MKSCAN' -n $n | '$MEBAKE' ingest - -o '$d' --force ${MEMORY[*]}"
-  if [ "$(tail -1 "$TSV" | cut -f5)" = ok ]; then
-    measure "$n" solve "$MEBAKE" solve "$d" "${MEMORY[@]}"
-    if [ "$(tail -1 "$TSV" | cut -f5)" = ok ]; then
-      measure "$n" export "$MEBAKE" export "$d" --lightmap "$WORK/s$n.exr" --stats "$WORK/s$n.stats.json" --force
-    fi
+  ok=1
+  if wants ingest; then
+    rm -rf "$d"
+    measure "$n" ingest bash -c "'$MKSCAN' -n $n | '$MEBAKE' ingest - -o '$d' --force ${MEMORY[*]}"
+    last_ok || ok=0
+  elif [ ! -d "$d" ]; then
+    echo "$n: no $d to reuse (run its ingest with --keep first)" >&2; continue
+  fi
+  if [ "$ok" = 1 ] && wants solve; then
+    measure "$n" solve "$MEBAKE" solve "$d" --force "${MEMORY[@]}"
+    last_ok || ok=0
+  fi
+  if [ "$ok" = 1 ] && wants export; then
+    measure "$n" export "$MEBAKE" export "$d" --lightmap "$WORK/s$n.exr" --stats "$WORK/s$n.stats.json" --force "${MEMORY[@]}"
   fi
   grep -v -P "^$n\t" "$WORK/disk.tsv" > "$WORK/disk.tmp" 2>/dev/null || true
   du -sk "$d" | awk -v n="$n" '{print n "\t" $1}' >> "$WORK/disk.tmp"
   mv "$WORK/disk.tmp" "$WORK/disk.tsv"
-  rm -rf "$d" "$WORK"/s$n.*.exr "$WORK/s$n.exr"
+  [ "$KEEP" = 1 ] || rm -rf "$d"
+  rm -f "$WORK"/s$n.*.exr "$WORK/s$n.exr"
 done
 
 python3 - "$TSV" "$CMD" "$WORK/disk.tsv" > "$WORK/scale.md" <<'PY'

@@ -36,6 +36,10 @@ uint64_t MemoryBudget::ExportCache() const {
     return std::min<uint64_t>(total_ / 16, 64 * kMiB);
 }
 
+uint64_t MemoryBudget::StitchCache() const {
+    return std::min<uint64_t>(total_ / 16, 16 * kMiB);
+}
+
 std::vector<MemoryShare> MemoryBudget::Shares() const {
     return {{"ingest.spill_cache", SpillCache(), "min(1/8, 12 MiB)"},
             {"ingest.binning_cache", BinningCache(), "min(1/8, 64 MiB, 4x spilled data)"},
@@ -44,7 +48,8 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"solve.embree_limit", EmbreeLimit(), "min(2x visibility, 1/2) (hard cap)"},
             {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"},
             {"solve.coefficient_pools", CoefficientPools(), "1/16 beyond pinned charts"},
-            {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"}};
+            {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"},
+            {"export.stitch_cache", StitchCache(), "min(1/16, 16 MiB)"}};
 }
 
 }  // namespace mebake

@@ -54,6 +54,11 @@ public:
     // per input vertex are looked up tile by tile). More buys little: evicted pages are
     // read back from the kernel's page cache.
     uint64_t ExportCache() const;
+    // Export and render: the sampled chart borders kept between charts' stitch data
+    // (seam_graph.h; each chart's is rebuilt from its neighbourhood, so a miss costs a
+    // tile read, never bytes). A fixed cap: more than a few hundred charts' borders buy
+    // little, since charts ask for their neighbours in chart order.
+    uint64_t StitchCache() const;
 
     std::vector<MemoryShare> Shares() const;
 

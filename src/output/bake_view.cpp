@@ -11,7 +11,8 @@
 
 namespace mebake::output {
 
-BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching stitching) {
+BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching stitching,
+                      size_t stitch_cache_bytes) {
     BakeView v;
     v.dir = dir;
     v.manifest = stream::ReadManifest(dir);
@@ -45,7 +46,7 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching
     const std::string kept = dir + "/solve/scene.json";
     v.scene = solve::LoadScene(v.manifest, std::filesystem::exists(kept) ? kept : "");
     if (stitching == SeamStitching::On)
-        v.seams = BuildSeamStitch(v);
+        v.stitcher = std::make_shared<const SeamStitcher>(v, stitch_cache_bytes);
     return v;
 }
 
@@ -56,6 +57,12 @@ std::shared_ptr<const ChartField> BakeView::Field(uint32_t c) const {
     // Not owning: the view holds the field.
     return std::shared_ptr<const ChartField>(std::shared_ptr<const ChartField>(),
                                              &solution.fields[c]);
+}
+
+std::shared_ptr<const ChartSeams> BakeView::Seams(uint32_t c) const {
+    if (!stitcher)
+        return nullptr;
+    return std::make_shared<const ChartSeams>(stitcher->Chart(*this, c));
 }
 
 std::vector<uint32_t> ChartResolutions(const BakeView& view) {
@@ -80,11 +87,11 @@ std::vector<uint32_t> AllCharts(const BakeView& view) {
 
 ChartShader::ChartShader(const stream::ChartTile& tile, const ChartField& field,
                          bool radiosity_unknown, const Scene& scene, const std::string& tile_path,
-                         const ChartSeams* seams)
+                         std::shared_ptr<const ChartSeams> seams)
     : tile_(tile),
       field_(field),
       display_(field, 1.0 / double(std::max<uint32_t>(1, tile.meta.resolution))),
-      seams_(seams && !seams->empty() ? seams : nullptr),
+      seams_(seams && !seams->empty() ? std::move(seams) : nullptr),
       radiosity_(radiosity_unknown),
       scene_(scene) {
     default_material_.use_vertex_colors = true;

@@ -13,6 +13,7 @@
 // its neighbours at chart borders (seam_stitch.h, when the view has the stitch data).
 #pragma once
 
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/vec.h"
 #include "output/continuous_field.h"
@@ -31,6 +32,8 @@
 
 namespace mebake::output {
 
+class SeamStitcher;
+
 // The solver's types every output reads.
 using solve::ChartField;
 using solve::Material;
@@ -44,15 +47,17 @@ struct BakeView {
     Scene scene;
     Solution solution;  // fields empty when opened with FieldLoading::OnDemand
     std::shared_ptr<const SolutionReader> solution_reader;  // OnDemand only
-    std::vector<ChartSeams> seams;  // per chart (seam_graph.h); empty: not stitched
+    std::shared_ptr<const SeamStitcher> stitcher;  // seam_graph.h; null: not stitched
 
     size_t chart_count() const { return manifest.charts.size(); }
     std::string TilePath(uint32_t chart) const { return stream::TilePath(dir, chart); }
     // Chart c's field: solution.fields[c], or read from solve/solution.bin on demand (then
     // the pointer owns it). Thread-safe.
     std::shared_ptr<const ChartField> Field(uint32_t c) const;
-    // Chart c's stitch data, or nullptr when the view is not stitched.
-    const ChartSeams* Seams(uint32_t c) const { return c < seams.size() ? &seams[c] : nullptr; }
+    bool stitched() const { return stitcher != nullptr; }
+    // Chart c's stitch data, built on demand from the tiles around it (seam_graph.h), or
+    // nullptr when the view is not stitched. Thread-safe.
+    std::shared_ptr<const ChartSeams> Seams(uint32_t c) const;
 };
 
 // All: every chart's field is read and checked at open (render and reference, which
@@ -65,12 +70,14 @@ enum class FieldLoading { All, OnDemand };
 enum class SeamStitching { On, Off };
 
 // Reads the manifest, solve/solution.bin and the scene the solve used (solve/scene.json
-// when the solve had one, else the inputs' materials and the default rig), and builds the
-// stitch data. Throws
+// when the solve had one, else the inputs' materials and the default rig). The stitch data
+// is built chart by chart when asked for; `stitch_cache_bytes` caps the charts' sampled
+// borders kept between requests (it changes the time, not the bytes). Throws
 // Error(Usage) when the directory is not ingested or not solved, Error(Corrupt) naming the
 // file when the solution does not match the charts.
 BakeView OpenBakeView(const std::string& dir, FieldLoading fields = FieldLoading::All,
-                      SeamStitching stitching = SeamStitching::On);
+                      SeamStitching stitching = SeamStitching::On,
+                      size_t stitch_cache_bytes = MemoryBudget(uint64_t(1) << 30).StitchCache());
 
 // The resolution of every chart from the manifest, validated (Error(Corrupt) otherwise).
 std::vector<uint32_t> ChartResolutions(const BakeView& view);
@@ -114,12 +121,12 @@ struct ShadingPoint {
 
 class ChartShader {
 public:
-    // Keeps references to tile, field, scene and seams (BakeView::Seams; nullptr: the field
-    // as fitted at chart borders). Throws Error(Corrupt) naming `tile_path` when a
+    // Keeps references to tile, field and scene, and the seams (BakeView::Seams; nullptr:
+    // the field as fitted at chart borders). Throws Error(Corrupt) naming `tile_path` when a
     // triangle's material is not in the scene.
     ChartShader(const stream::ChartTile& tile, const ChartField& field, bool radiosity_unknown,
                 const Scene& scene, const std::string& tile_path,
-                const ChartSeams* seams = nullptr);
+                std::shared_ptr<const ChartSeams> seams = nullptr);
 
     // The point of triangle t with barycentrics (b0, b1, b2) (they need not sum to 1
     // exactly; weights are used as given).
@@ -150,7 +157,7 @@ private:
     const stream::ChartTile& tile_;
     const ChartField& field_;
     ContinuousField display_;  // the field as shown: C0 across node borders
-    const ChartSeams* seams_;  // and stitched across chart borders
+    std::shared_ptr<const ChartSeams> seams_;  // and stitched across chart borders
     bool radiosity_;
     const Scene& scene_;
     std::vector<uint32_t> vertex_triangle_;  // lowest triangle using each vertex

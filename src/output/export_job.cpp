@@ -5,17 +5,22 @@
 #include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "core/temp_file.h"
 #include "core/units.h"
 #include "io/byte_stream.h"
 #include "output/bake_view.h"
 #include "output/export_mesh.h"
 #include "output/node_seams.h"
+#include "output/seam_graph.h"
 #include "output/seams.h"
 #include "output/vertex_colors.h"
 
+#include <atomic>
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
 namespace mebake::output {
 
@@ -114,6 +119,25 @@ void MeasureAllSeams(const BakeView& view, nlohmann::json* j) {
                  ns.display.p95, ns.display.max);
 }
 
+std::string LowerExtension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    return ext;
+}
+
+// The light map's PNG pages for a .glb when the user asked for no PNG: temporary files,
+// removed when the export ends (or fails).
+struct TemporaryPngPages {
+    std::string path;  // PagePath's base; empty: none
+    uint32_t pages = 0;
+    ~TemporaryPngPages() {
+        std::error_code ec;
+        for (uint32_t p = 0; !path.empty() && p < pages; ++p)
+            std::filesystem::remove(PagePath(path, p, pages), ec);
+    }
+};
+
 }  // namespace
 
 void RunExportJob(const ExportJobOptions& c) {
@@ -121,7 +145,8 @@ void RunExportJob(const ExportJobOptions& c) {
     CheckRequested(c);
     // Fields are read a chart at a time: memory follows the charts being written.
     BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand,
-                                 c.stitch ? SeamStitching::On : SeamStitching::Off);
+                                 c.stitch ? SeamStitching::On : SeamStitching::Off,
+                                 size_t(MemoryBudget(c.memory).StitchCache()));
     const Atlas atlas = PackAtlas(ChartResolutions(view), c.atlas);
     CheckFreshOutputs(c, atlas);
     spdlog::info("{} charts in {} atlas page{} ({} texels, {:.1f}% filled)", view.chart_count(),
@@ -141,6 +166,20 @@ void RunExportJob(const ExportJobOptions& c) {
         outputs += o->empty() ? 0 : 1;
     ProgressStage progress("export", outputs * view.chart_count(), "charts");
 
+    // A .glb beside an .exr light map embeds the light map's PNG pages written from the
+    // EXR's texels (the same bytes it would shade itself), so the light map is shaded and
+    // stitched once; without --lightmap-png they go to temporary files.
+    std::string png = c.lightmap_png;
+    TemporaryPngPages temporary;
+    if (png.empty() && !c.lightmap.empty() && c.lightmap != "-" &&
+        LowerExtension(c.lightmap) == ".exr" && c.mesh != "-" && LowerExtension(c.mesh) == ".glb") {
+        static std::atomic<int> serial{0};
+        temporary.path = fmt::format("{}/mebake-{}-{}-lightmap.png", TemporaryDirectory(),
+                                     getpid(), serial++);
+        temporary.pages = uint32_t(atlas.pages.size());
+        png = temporary.path;
+    }
+
     struct Map {
         const std::string& path;
         MapContent content;
@@ -154,8 +193,10 @@ void RunExportJob(const ExportJobOptions& c) {
         const auto t = Clock::now();
         MapWriteOptions mo = c.maps;
         if (m.content == MapContent::Radiosity)
-            mo.png_path = c.lightmap_png;
-        const auto files = WriteMapPages(view, atlas, m.path, m.content, mo);
+            mo.png_path = png;
+        auto files = WriteMapPages(view, atlas, m.path, m.content, mo);
+        if (m.content == MapContent::Radiosity && !temporary.path.empty())
+            files.resize(atlas.pages.size());  // the temporary PNG pages are not outputs
         seconds[m.key] = Since(t);
         j[m.key] = files;
         progress.Add(view.chart_count());
@@ -166,8 +207,8 @@ void RunExportJob(const ExportJobOptions& c) {
         MeshExportOptions me;
         me.glb_mode = c.glb_mode;
         me.tone = c.maps.tone;
-        for (uint32_t p = 0; !c.lightmap_png.empty() && p < atlas.pages.size(); ++p)
-            me.light_map_pngs.push_back(PagePath(c.lightmap_png, p, uint32_t(atlas.pages.size())));
+        for (uint32_t p = 0; !png.empty() && p < atlas.pages.size(); ++p)
+            me.light_map_pngs.push_back(PagePath(png, p, uint32_t(atlas.pages.size())));
         const auto st = WriteBakedMesh(view, atlas, c.mesh, me);
         seconds["mesh"] = Since(t);
         progress.Add(view.chart_count());
@@ -200,6 +241,13 @@ void RunExportJob(const ExportJobOptions& c) {
         progress.Add(view.chart_count());
     }
     progress.Finish();
+    if (view.stitcher) {
+        const uint64_t hits = view.stitcher->hits(), misses = view.stitcher->misses();
+        j["stitch_cache"] = {{"hits", hits}, {"misses", misses}};
+        spdlog::info("stitch data: charts' sampled borders {} times from the cache, {} sampled "
+                     "({:.1f}% hits)",
+                     hits, misses, 100.0 * double(hits) / double(std::max<uint64_t>(1, hits + misses)));
+    }
     seconds["total"] = Since(t0);
     j["seconds"] = seconds;
     j["peak_rss_bytes"] = PeakRssBytes();

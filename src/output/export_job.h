@@ -29,7 +29,7 @@ struct ExportJobOptions {
     bool float_colors = false;  // PLY vertex colours as linear floats
     bool stitch = true;         // fields stitched across chart borders (seam_graph.h)
     bool force = false;         // overwrite existing outputs
-    uint64_t memory = uint64_t(1) << 30;  // the budget (--memory): the vertex colours' caches
+    uint64_t memory = uint64_t(1) << 30;  // the budget (--memory): the vertex colours' and stitch caches
 };
 
 // Throws Error(Usage) when nothing is asked for, when two outputs go to stdout, or when an

@@ -295,7 +295,7 @@ std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas,
 
 std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& atlas,
                                            MapContent content) {
-    if (view.seams.empty())
+    if (!view.stitched())
         return nullptr;
     TexelStitchStats s;
     auto stitch = std::make_unique<TexelStitch>(StitchTexels(view, atlas, content, &s));

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 #include <unordered_set>
 
 namespace mebake::output {
@@ -32,10 +31,17 @@ struct Side {
     std::vector<float> vals;  // (intervals + 1) x blocks
 };
 
-struct ChartSides {
-    std::vector<Key> keys;
+}  // namespace
+
+struct SeamStitcher::Sides {
+    std::vector<Key> keys;  // in the order of OutlineEdges
     std::vector<Side> sides;
+    size_t bytes = 0;  // what it holds, roughly
 };
+
+namespace {
+
+using ChartSides = SeamStitcher::Sides;
 
 ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile& tile,
                        int blocks) {
@@ -68,6 +74,7 @@ ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile
             shown.Eval(s.a.x + t * (s.b.x - s.a.x), s.a.y + t * (s.b.y - s.a.y),
                        &s.vals[size_t(k) * size_t(blocks)]);
         }
+        out.bytes += sizeof(Key) + sizeof(Side) + s.vals.size() * sizeof(float);
         out.keys.push_back({e.g0, e.g1});
         out.sides.push_back(std::move(s));
     }
@@ -90,15 +97,6 @@ struct VertexSum {
     uint32_t n = 0;
 };
 
-// The stitched edges of every chart as they are found, ends filled in at the end.
-struct Collected {
-    std::vector<std::vector<SeamEdge>> edges;
-    std::vector<std::vector<End>> ends;
-    std::vector<std::vector<float>> targets;
-    std::unordered_map<uint64_t, VertexSum> vertex;
-    std::unordered_set<Key, KeyHash> counted;  // (vertex, chart) already in `vertex`
-};
-
 // Weight of a side's value in a target: its brightness (luminance of n . E, or of B for a
 // radiosity solution) to the power kBrightPower, so a side much darker than the other
 // counts little. Where two charts disagree much, the darker one is nearly always the wrong
@@ -112,44 +110,36 @@ double Weight(const float* v, const Vec3f& n, int blocks) {
     return std::pow(std::max(y, 1e-6), kBrightPower);
 }
 
-void AddVertex(Collected& col, uint64_t g, const Side& s, bool last, int blocks) {
-    if (!col.counted.insert({g, s.chart}).second)
-        return;
-    VertexSum& sum = col.vertex[g];
-    sum.e.resize(size_t(blocks), 0.0);
-    const float* v = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
-    const double w = Weight(v, s.normal, blocks);
-    for (int b = 0; b < blocks; ++b)
-        sum.e[size_t(b)] += w * double(v[b]);
-    sum.weight += w;
-    sum.normal += Vec3d(last ? s.n1 : s.n0);
-    ++sum.n;
-}
+// The vertex sums of chart c's edge ends: each chart's value once per vertex (the first
+// side met), in the order the pass meets the pairs.
+struct VertexSums {
+    std::unordered_map<uint64_t, VertexSum> sum;
+    std::unordered_set<Key, KeyHash> counted;  // (vertex, chart) already in `sum`
 
-// Records the edge (g0, g1) for both sides with the mean of their samples as targets.
-void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int blocks) {
-    for (const Side* s : {&x, &y}) {
-        auto& targets = col.targets[s->chart];
-        SeamEdge e;
-        e.a = s->a;
-        e.b = s->b;
-        e.band = s->band;
-        e.first = uint32_t(targets.size() / size_t(blocks));
-        e.count = s->intervals + 1;
-        for (uint32_t k = 0; k <= s->intervals; ++k) {
-            const float* vx = &x.vals[size_t(k) * size_t(blocks)];
-            const float* vy = &y.vals[size_t(k) * size_t(blocks)];
-            const double wx = Weight(vx, x.normal, blocks), wy = Weight(vy, y.normal, blocks);
-            for (int b = 0; b < blocks; ++b)
-                targets.push_back(float((wx * vx[b] + wy * vy[b]) / (wx + wy)));
-        }
-        col.edges[s->chart].push_back(e);
-        col.ends[s->chart].push_back({key.first, s->v0, s->n0, e.first});
-        col.ends[s->chart].push_back({key.second, s->v1, s->n1, e.first + e.count - 1});
-        AddVertex(col, key.first, *s, false, blocks);
-        AddVertex(col, key.second, *s, true, blocks);
+    void Add(uint64_t g, const Side& s, bool last, int blocks) {
+        if (!counted.insert({g, s.chart}).second)
+            return;
+        VertexSum& v = sum[g];
+        v.e.resize(size_t(blocks), 0.0);
+        const float* val = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
+        const double w = Weight(val, s.normal, blocks);
+        for (int b = 0; b < blocks; ++b)
+            v.e[size_t(b)] += w * double(val[b]);
+        v.weight += w;
+        v.normal += Vec3d(last ? s.n1 : s.n0);
+        ++v.n;
     }
-}
+};
+
+// A side of the neighbourhood: slot of its chart (charts ascending) and index in its sides.
+struct At {
+    uint32_t slot = 0, index = 0;
+};
+
+// A stitched border edge: y is the side the pass meets second (it pairs with x, waiting).
+struct Pair {
+    At x, y;
+};
 
 }  // namespace
 
@@ -201,66 +191,214 @@ Vec3f FaceNormal(const stream::ChartTile& tile, uint32_t triangle) {
                            tile.position[f[2]] - tile.position[f[0]]));
 }
 
-std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* stats) {
-    const int blocks = view.solution.radiosity ? 3 : 9;
-    const size_t charts = view.chart_count();
-    Collected col;
-    col.edges.resize(charts);
-    col.ends.resize(charts);
-    col.targets.resize(charts);
-    SeamGraphStats st;
-    std::unordered_map<Key, Side, KeyHash> waiting;
-    ForEachTile(
-        view, AllCharts(view), stream::TileParts::Mesh,
-        [&](uint32_t c, stream::ChartTile& tile) { return SampleSides(view, c, tile, blocks); },
-        [&](uint32_t c, stream::ChartTile&, ChartSides& cs) {
-            for (size_t i = 0; i < cs.sides.size(); ++i) {
-                auto it = waiting.find(cs.keys[i]);
-                if (it == waiting.end()) {
-                    waiting.emplace(cs.keys[i], std::move(cs.sides[i]));
-                    continue;
-                }
-                const Side& other = it->second;
-                if (other.chart == c)
-                    continue;  // a split vertex inside one chart
-                if (Dot(other.normal, cs.sides[i].normal) < kFoldCos)
-                    ++st.fold_edges;
-                else if (other.intervals == cs.sides[i].intervals) {
-                    AddPair(col, cs.keys[i], other, cs.sides[i], blocks);
-                    ++st.stitched_edges;
-                }
-                waiting.erase(it);
-            }
-        });
-    waiting.clear();
-    std::vector<ChartSeams> out(charts);
-    for (size_t c = 0; c < charts; ++c) {
-        auto& targets = col.targets[c];
-        std::vector<std::pair<uint32_t, Vec3f>> normals;
-        for (const End& end : col.ends[c]) {
-            const VertexSum& sum = col.vertex.at(end.g);
-            for (int b = 0; b < blocks; ++b)
-                targets[size_t(end.target) * size_t(blocks) + size_t(b)] =
-                    float(sum.e[size_t(b)] / sum.weight);
-            // One shading normal on both sides too, unless the copies disagree as at a
-            // crease (ingest keeps each side's own normal there).
-            const Vec3f shared(Normalize(sum.normal));
-            if (Dot(shared, Normalize(end.normal)) >= kFoldCos)
-                normals.push_back({end.v, shared});
-        }
-        std::sort(normals.begin(), normals.end(),
-                  [](const auto& x, const auto& y) { return x.first < y.first; });
-        normals.erase(std::unique(normals.begin(), normals.end(),
-                                  [](const auto& x, const auto& y) { return x.first == y.first; }),
-                      normals.end());
-        st.samples += targets.size() / size_t(blocks);
-        if (!col.edges[c].empty())
-            out[c] =
-                ChartSeams(blocks, std::move(col.edges[c]), std::move(targets), std::move(normals));
-        col.ends[c] = {};
+SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes)
+    : cache_bytes_(cache_bytes) {
+    // Charts that share a vertex have touching boxes (each box holds its chart's vertices;
+    // the margin only adds candidates, which find no common key).
+    const auto& ch = view.manifest.charts;
+    const double margin = 1e-5 * Length(view.manifest.bbox_max - view.manifest.bbox_min);
+    auto touch = [&](size_t a, size_t b) {
+        for (int k = 0; k < 3; ++k)
+            if (double(ch[a].bbox_min[k]) > double(ch[b].bbox_max[k]) + margin ||
+                double(ch[b].bbox_min[k]) > double(ch[a].bbox_max[k]) + margin)
+                return false;
+        return true;
+    };
+    neighbour_start_.assign(1, 0);
+    for (size_t a = 0; a < ch.size(); ++a) {
+        for (size_t b = 0; b < ch.size(); ++b)
+            if (b != a && touch(a, b))
+                neighbours_.push_back(uint32_t(b));
+        neighbour_start_.push_back(uint32_t(neighbours_.size()));
     }
+}
+
+SeamStitcher::~SeamStitcher() = default;
+
+uint64_t SeamStitcher::hits() const {
+    std::lock_guard lock(mutex_);
+    return hits_;
+}
+
+uint64_t SeamStitcher::misses() const {
+    std::lock_guard lock(mutex_);
+    return misses_;
+}
+
+std::shared_ptr<const SeamStitcher::Sides> SeamStitcher::SidesOf(const BakeView& view,
+                                                                  uint32_t c) const {
+    {
+        std::lock_guard lock(mutex_);
+        auto it = cached_.find(c);
+        if (it != cached_.end()) {
+            lru_.splice(lru_.begin(), lru_, it->second.at);
+            ++hits_;
+            return it->second.sides;
+        }
+        ++misses_;
+    }
+    const int blocks = view.solution.radiosity ? 3 : 9;
+    const stream::ChartTile tile = stream::ReadTile(view.TilePath(c), stream::TileParts::Mesh);
+    auto sides = std::make_shared<const Sides>(SampleSides(view, c, tile, blocks));
+    std::lock_guard lock(mutex_);
+    if (sides->bytes <= cache_bytes_ && !cached_.count(c)) {
+        lru_.push_front(c);
+        cached_[c] = {sides, lru_.begin()};
+        cached_bytes_ += sides->bytes;
+        while (cached_bytes_ > cache_bytes_) {
+            auto old = cached_.find(lru_.back());
+            cached_bytes_ -= old->second.sides->bytes;
+            cached_.erase(old);
+            lru_.pop_back();
+        }
+    }
+    return sides;
+}
+
+ChartSeams SeamStitcher::Chart(const BakeView& view, uint32_t c, SeamGraphStats* stats) const {
+    const int blocks = view.solution.radiosity ? 3 : 9;
+    CHECK_LT(c, view.chart_count());
+    // The neighbourhood in chart order: every chart with a vertex of c.
+    std::vector<uint32_t> charts(neighbours_.begin() + neighbour_start_[c],
+                                 neighbours_.begin() + neighbour_start_[c + 1]);
+    charts.insert(std::lower_bound(charts.begin(), charts.end(), c), c);
+    const uint32_t self = uint32_t(std::lower_bound(charts.begin(), charts.end(), c) - charts.begin());
+    std::vector<std::shared_ptr<const Sides>> sides(charts.size());
+    sides[self] = SidesOf(view, c);
+    if (sides[self]->keys.empty())
+        return {};
+    for (size_t k = 0; k < charts.size(); ++k)
+        if (k != self)
+            sides[k] = SidesOf(view, charts[k]);
+    auto side = [&](At a) -> const Side& { return sides[a.slot]->sides[a.index]; };
+    auto key = [&](At a) -> const Key& { return sides[a.slot]->keys[a.index]; };
+
+    // The keys with a vertex of c's outline: every chart holding one is in the
+    // neighbourhood, so their pairing below is the whole pass's.
+    std::vector<uint64_t> outline;
+    for (const Key& k : sides[self]->keys) {
+        outline.push_back(k.first);
+        outline.push_back(k.second);
+    }
+    std::sort(outline.begin(), outline.end());
+    outline.erase(std::unique(outline.begin(), outline.end()), outline.end());
+    auto on_outline = [&](uint64_t g) {
+        return std::binary_search(outline.begin(), outline.end(), g);
+    };
+    std::vector<At> met;  // in the pass's order, then grouped by key (stable)
+    for (uint32_t k = 0; k < charts.size(); ++k)
+        for (uint32_t i = 0; i < sides[k]->keys.size(); ++i)
+            if (on_outline(sides[k]->keys[i].first) || on_outline(sides[k]->keys[i].second))
+                met.push_back({k, i});
+    std::stable_sort(met.begin(), met.end(), [&](At a, At b) { return key(a) < key(b); });
+
+    // The pass's pairing, key by key: a side waits until a side of another chart meets it.
+    SeamGraphStats st;
+    std::vector<Pair> pairs;
+    for (size_t i = 0; i < met.size();) {
+        size_t j = i;
+        const At* waiting = nullptr;
+        for (; j < met.size() && key(met[j]) == key(met[i]); ++j) {
+            if (!waiting) {
+                waiting = &met[j];
+                continue;
+            }
+            if (waiting->slot == met[j].slot)
+                continue;  // a split vertex inside one chart
+            const Side &x = side(*waiting), &y = side(met[j]);
+            if (Dot(x.normal, y.normal) < kFoldCos) {
+                if (met[j].slot == self)
+                    ++st.fold_edges;
+            } else if (x.intervals == y.intervals) {
+                pairs.push_back({*waiting, met[j]});
+            }
+            waiting = nullptr;
+        }
+        i = j;
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+        return a.y.slot != b.y.slot ? a.y.slot < b.y.slot : a.y.index < b.y.index;
+    });
+
+    // c's edges in the order they are met, with the mean of both sides' samples.
+    std::vector<SeamEdge> edges;
+    std::vector<float> targets;
+    std::vector<End> ends;
+    for (const Pair& p : pairs) {
+        if (p.x.slot != self && p.y.slot != self)
+            continue;
+        if (p.y.slot == self)
+            ++st.stitched_edges;
+        const Side &x = side(p.x), &y = side(p.y), &s = p.x.slot == self ? x : y;
+        SeamEdge e;
+        e.a = s.a;
+        e.b = s.b;
+        e.band = s.band;
+        e.first = uint32_t(targets.size() / size_t(blocks));
+        e.count = s.intervals + 1;
+        for (uint32_t k = 0; k <= s.intervals; ++k) {
+            const float* vx = &x.vals[size_t(k) * size_t(blocks)];
+            const float* vy = &y.vals[size_t(k) * size_t(blocks)];
+            const double wx = Weight(vx, x.normal, blocks), wy = Weight(vy, y.normal, blocks);
+            for (int b = 0; b < blocks; ++b)
+                targets.push_back(float((wx * vx[b] + wy * vy[b]) / (wx + wy)));
+        }
+        edges.push_back(e);
+        ends.push_back({key(p.y).first, s.v0, s.n0, e.first});
+        ends.push_back({key(p.y).second, s.v1, s.n1, e.first + e.count - 1});
+    }
+    st.samples = targets.size() / size_t(blocks);
     if (stats)
         *stats = st;
+    if (edges.empty())
+        return {};
+
+    // The ends take the mean over every chart whose stitched edges meet there.
+    std::vector<uint64_t> end_vertices;
+    for (const End& end : ends)
+        end_vertices.push_back(end.g);
+    std::sort(end_vertices.begin(), end_vertices.end());
+    VertexSums vs;
+    for (const Pair& p : pairs)
+        for (const At a : {p.x, p.y})
+            for (const bool last : {false, true}) {
+                const uint64_t g = last ? key(a).second : key(a).first;
+                if (std::binary_search(end_vertices.begin(), end_vertices.end(), g))
+                    vs.Add(g, side(a), last, blocks);
+            }
+    std::vector<std::pair<uint32_t, Vec3f>> normals;
+    for (const End& end : ends) {
+        const VertexSum& sum = vs.sum.at(end.g);
+        for (int b = 0; b < blocks; ++b)
+            targets[size_t(end.target) * size_t(blocks) + size_t(b)] =
+                float(sum.e[size_t(b)] / sum.weight);
+        // One shading normal on both sides too, unless the copies disagree as at a
+        // crease (ingest keeps each side's own normal there).
+        const Vec3f shared(Normalize(sum.normal));
+        if (Dot(shared, Normalize(end.normal)) >= kFoldCos)
+            normals.push_back({end.v, shared});
+    }
+    std::sort(normals.begin(), normals.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    normals.erase(std::unique(normals.begin(), normals.end(),
+                              [](const auto& x, const auto& y) { return x.first == y.first; }),
+                  normals.end());
+    return ChartSeams(blocks, std::move(edges), std::move(targets), std::move(normals));
+}
+
+std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* stats) {
+    const SeamStitcher stitcher(view, size_t(16) << 20);
+    std::vector<ChartSeams> out(view.chart_count());
+    SeamGraphStats sum;
+    for (uint32_t c = 0; c < out.size(); ++c) {
+        SeamGraphStats st;
+        out[c] = stitcher.Chart(view, c, &st);
+        sum.stitched_edges += st.stitched_edges;
+        sum.fold_edges += st.fold_edges;
+        sum.samples += st.samples;
+    }
+    if (stats)
+        *stats = sum;
     return out;
 }
 

@@ -4,16 +4,19 @@
 // seams.h, finds it); edges where the surface folds (faces more than 45 degrees apart) are
 // left alone, since E differs there in any correct solution, and so are mesh borders.
 //
-// One pass over the tiles (in batches, ForEachTile): each chart samples its own shown field
+// The rule, as one pass over the tiles in chart order: each chart samples its own shown field
 // (continuous_field.h) at n + 1 points along every outline edge, n from the edge's 3D
 // length (two samples per texel of the bake's texel size, so both sides choose the same n).
 // Pairs meet in chart order; an edge's targets are the means of both sides' samples, and
 // the targets at its ends the mean over every chart whose stitched edges meet at that vertex,
 // so edges meeting at a vertex agree there. Deterministic (sums in chart order).
 //
-// Memory: the outline edges still waiting for their other side, and the finished targets
-// (n + 1 samples of 3 or 9 floats per border edge and side): it grows with the total length
-// of the chart borders, not with the mesh.
+// Each chart's data is built on demand (SeamStitcher::Chart), from its own tile and those of
+// the charts whose boxes touch its box (every chart sharing a vertex with it): the pass
+// above is replayed on those charts alone, key by key in chart order, with the pairs taken
+// in the order the pass meets them, so the data are the bytes of a pass over every tile.
+// Memory: the sampled sides of a chart's neighbourhood, and an LRU of recently sampled
+// charts under a fixed byte cap; nothing grows with the total border length.
 #pragma once
 
 #include "output/seam_stitch.h"
@@ -21,6 +24,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -62,7 +69,41 @@ struct SeamGraphStats {
     uint64_t samples = 0;         // targets over all edges and sides
 };
 
-// Every chart's stitch data (index = chart id; empty for a chart without stitched edges).
+// Builds charts' stitch data on demand and keeps the sampled sides of recently used charts
+// (a chart's neighbours are asked for again by the charts around it). Thread-safe.
+class SeamStitcher {
+public:
+    // `cache_bytes`: the cap of the sampled sides kept between calls.
+    SeamStitcher(const BakeView& view, size_t cache_bytes);
+    ~SeamStitcher();
+    // Chart c's stitch data (empty when it has no stitched edge); stats, when given, gets
+    // the edges and fold edges whose later side is in c (so sums over charts count each
+    // once) and c's samples.
+    ChartSeams Chart(const BakeView& view, uint32_t c, SeamGraphStats* stats = nullptr) const;
+    // Sampled charts served from the cache / sampled again.
+    uint64_t hits() const;
+    uint64_t misses() const;
+
+    struct Sides;  // one chart's sampled outline sides
+
+private:
+    std::shared_ptr<const Sides> SidesOf(const BakeView& view, uint32_t c) const;
+
+    std::vector<uint32_t> neighbour_start_, neighbours_;  // per chart, CSR, ascending
+    size_t cache_bytes_;
+    mutable std::mutex mutex_;
+    mutable std::list<uint32_t> lru_;  // front: most recent
+    struct Entry {
+        std::shared_ptr<const Sides> sides;
+        std::list<uint32_t>::iterator at;
+    };
+    mutable std::unordered_map<uint32_t, Entry> cached_;
+    mutable size_t cached_bytes_ = 0;
+    mutable uint64_t hits_ = 0, misses_ = 0;
+};
+
+// Every chart's stitch data (index = chart id; empty for a chart without stitched edges),
+// chart by chart through a SeamStitcher; stats summed over the charts.
 std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* stats = nullptr);
 
 }  // namespace mebake::output

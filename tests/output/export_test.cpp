@@ -7,6 +7,7 @@
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "io/png_writer.h"
+#include "output/export_job.h"
 #include "output/export_mesh.h"
 #include "output/lightmap.h"
 #include "output/vertex_colors.h"
@@ -88,6 +89,40 @@ TEST_F(ExportTest, LightMapPngBesideTheExrAndInTheGlbAreTheSameBytes) {
     // A PNG companion is for a radiosity EXR only.
     EXPECT_THROW(WriteMapPages(view_, atlas_, dir_ + "/x.png", MapContent::Radiosity, mo), Error);
     EXPECT_THROW(WriteMapPages(view_, atlas_, dir_ + "/e.exr", MapContent::Irradiance, mo), Error);
+}
+
+// `mebake export --lightmap x.exr --mesh y.glb` (no PNG asked for): the .glb embeds the PNG
+// pages of the light map written from the EXR's texels into temporary files, which are gone
+// afterwards; every output is the bytes of that output exported alone.
+TEST_F(ExportTest, LightMapAndGlbTogetherAreTheBytesOfEachAlone) {
+    const std::string tmp = dir_ + "/tmp";
+    std::filesystem::create_directories(tmp);
+    const char* old = std::getenv("TMPDIR");
+    const std::string saved = old ? old : "";
+    setenv("TMPDIR", tmp.c_str(), 1);
+    ExportJobOptions both;
+    both.dir = dir_;
+    both.lightmap = dir_ + "/both.exr";
+    both.mesh = dir_ + "/both.glb";
+    both.stats = dir_ + "/both.json";
+    RunExportJob(both);
+    ExportJobOptions map = both, mesh = both;
+    map.lightmap = dir_ + "/alone.exr";
+    map.mesh = map.stats = "";
+    mesh.lightmap = mesh.stats = "";
+    mesh.mesh = dir_ + "/alone.glb";
+    RunExportJob(map);
+    RunExportJob(mesh);
+    if (old)
+        setenv("TMPDIR", saved.c_str(), 1);
+    else
+        unsetenv("TMPDIR");
+    EXPECT_EQ(Slurp(dir_ + "/both.exr"), Slurp(dir_ + "/alone.exr"));
+    EXPECT_EQ(Slurp(dir_ + "/both.glb"), Slurp(dir_ + "/alone.glb"));
+    EXPECT_TRUE(std::filesystem::is_empty(tmp));
+    std::ifstream in(dir_ + "/both.json");
+    const json j = json::parse(in);
+    EXPECT_EQ(j["lightmap"], json::array({dir_ + "/both.exr"}));
 }
 
 TEST_F(ExportTest, GlbWithEmbeddedLightMap) {

@@ -451,5 +451,48 @@ TEST_F(StitchTest, SameForAnyThreadCount) {
     EXPECT_EQ(pages[0], pages[1]);
 }
 
+// Each chart's stitch data is built on demand from its neighbourhood; what is cached
+// between charts (and in which order charts are asked for) changes the work, not the data.
+TEST_F(StitchTest, SameDataWhateverTheCacheAndTheOrder) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    const BakeView none = OpenBakeView(dir_, FieldLoading::All, SeamStitching::On, 0);
+    const BakeView all = OpenBakeView(dir_, FieldLoading::All, SeamStitching::On, size_t(1) << 30);
+    const uint32_t n = uint32_t(none.chart_count());
+    std::vector<std::shared_ptr<const ChartSeams>> a(n), b(n);
+    for (uint32_t c = 0; c < n; ++c)
+        a[c] = none.Seams(c);
+    for (uint32_t c = n; c-- > 0;)
+        b[c] = all.Seams(c);
+    EXPECT_EQ(none.stitcher->hits(), 0u);
+    EXPECT_GT(all.stitcher->hits(), 0u);
+    EXPECT_EQ(all.stitcher->misses(), n);  // each chart sampled once
+    for (uint32_t c = 0; c < n; ++c) {
+        ASSERT_EQ(a[c]->edge_count(), b[c]->edge_count());
+        EXPECT_GT(a[c]->edge_count(), 0u);
+        for (size_t k = 0; k < a[c]->edge_count(); ++k) {
+            const SeamEdge &x = a[c]->edges()[k], &y = b[c]->edges()[k];
+            EXPECT_EQ(x.a, y.a);
+            EXPECT_EQ(x.b, y.b);
+            EXPECT_EQ(x.band, y.band);
+            EXPECT_EQ(x.count, y.count);
+            for (uint32_t s = 0; s < x.count; ++s) {
+                float tx[9], ty[9];
+                a[c]->Target(x, double(s) / (x.count - 1), tx);
+                b[c]->Target(y, double(s) / (y.count - 1), ty);
+                for (int k9 = 0; k9 < 9; ++k9)
+                    EXPECT_EQ(tx[k9], ty[k9]);
+            }
+        }
+        ASSERT_EQ(a[c]->normals().size(), b[c]->normals().size());
+        for (size_t k = 0; k < a[c]->normals().size(); ++k) {
+            EXPECT_EQ(a[c]->normals()[k].first, b[c]->normals()[k].first);
+            EXPECT_EQ(a[c]->normals()[k].second, b[c]->normals()[k].second);
+        }
+    }
+    const Atlas atlas = PackAtlas(ChartResolutions(none));
+    EXPECT_EQ(Page(none, atlas), Page(all, atlas));
+}
+
 }  // namespace
 }  // namespace mebake::output
