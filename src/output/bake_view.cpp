@@ -62,7 +62,7 @@ std::shared_ptr<const ChartField> BakeView::Field(uint32_t c) const {
 std::shared_ptr<const ChartSeams> BakeView::Seams(uint32_t c) const {
     if (!stitcher)
         return nullptr;
-    return std::make_shared<const ChartSeams>(stitcher->Chart(*this, c));
+    return stitcher->Chart(*this, c);
 }
 
 std::vector<uint32_t> ChartResolutions(const BakeView& view) {

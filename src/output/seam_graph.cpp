@@ -1,11 +1,18 @@
 #include "output/seam_graph.h"
 
 #include "core/check.h"
+#include "core/error.h"
+#include "core/temp_file.h"
 #include "output/bake_view.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 #include <unordered_set>
+
+#include <unistd.h>
 
 namespace mebake::output {
 
@@ -191,8 +198,16 @@ Vec3f FaceNormal(const stream::ChartTile& tile, uint32_t triangle) {
                            tile.position[f[2]] - tile.position[f[0]]));
 }
 
-SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes)
-    : cache_bytes_(cache_bytes) {
+struct SeamStitcher::Parts {
+    std::vector<SeamEdge> edges;
+    std::vector<float> targets;
+    std::vector<std::pair<uint32_t, Vec3f>> normals;
+};
+
+SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes, const std::string& temp_dir)
+    : cache_bytes_(cache_bytes),
+      fd_(OpenTemporaryFile(temp_dir, "stitch data")),
+      stored_(view.chart_count(), {0, 0}) {
     // Charts that share a vertex have touching boxes (each box holds its chart's vertices;
     // the margin only adds candidates, which find no common key).
     const auto& ch = view.manifest.charts;
@@ -213,7 +228,111 @@ SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes)
     }
 }
 
-SeamStitcher::~SeamStitcher() = default;
+SeamStitcher::~SeamStitcher() {
+    ::close(fd_);
+}
+
+namespace {
+
+// The parts' arrays one after the other, behind their three counts.
+template <typename T>
+void Append(std::vector<char>& out, const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const size_t at = out.size();
+    out.resize(at + v.size() * sizeof(T));
+    if (!v.empty())
+        std::memcpy(out.data() + at, v.data(), v.size() * sizeof(T));
+}
+
+template <typename T>
+void Take(const std::vector<char>& in, size_t& at, uint64_t count, std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    CHECK_LE(at + count * sizeof(T), in.size());
+    v.resize(count);
+    if (count)
+        std::memcpy(v.data(), in.data() + at, count * sizeof(T));
+    at += count * sizeof(T);
+}
+
+}  // namespace
+
+std::shared_ptr<const ChartSeams> SeamStitcher::Chart(const BakeView& view, uint32_t c) const {
+    const int blocks = view.solution.radiosity ? 3 : 9;
+    CHECK_LT(c, stored_.size());
+    std::pair<uint64_t, uint64_t> at;
+    {
+        std::lock_guard lock(mutex_);
+        at = stored_[c];
+    }
+    Parts parts;
+    if (at.second > 0) {
+        std::vector<char> bytes(at.second);
+        for (size_t done = 0; done < bytes.size();) {
+            const ssize_t r = ::pread(fd_, bytes.data() + done, bytes.size() - done,
+                                      off_t(at.first + done));
+            if (r <= 0)
+                IoError({"stitch data (temporary file)", at.first + done}, "read failed: {}",
+                        r < 0 ? ErrnoString(errno) : "unexpected end");
+            done += size_t(r);
+        }
+        uint64_t count[3];
+        std::memcpy(count, bytes.data(), sizeof(count));
+        size_t pos = sizeof(count);
+        Take(bytes, pos, count[0], parts.edges);
+        Take(bytes, pos, count[1], parts.targets);
+        std::vector<uint32_t> vertex;
+        std::vector<Vec3f> normal;
+        Take(bytes, pos, count[2], vertex);
+        Take(bytes, pos, count[2], normal);
+        for (size_t k = 0; k < vertex.size(); ++k)
+            parts.normals.push_back({vertex[k], normal[k]});
+    } else {
+        parts = BuildParts(view, c, nullptr);
+        const uint64_t count[3] = {parts.edges.size(), parts.targets.size(),
+                                   parts.normals.size()};
+        std::vector<char> bytes(sizeof(count));
+        std::memcpy(bytes.data(), count, sizeof(count));
+        Append(bytes, parts.edges);
+        Append(bytes, parts.targets);
+        std::vector<uint32_t> vertex;
+        std::vector<Vec3f> normal;
+        for (const auto& [v, n] : parts.normals) {
+            vertex.push_back(v);
+            normal.push_back(n);
+        }
+        Append(bytes, vertex);
+        Append(bytes, normal);
+        uint64_t off;
+        {
+            std::lock_guard lock(mutex_);
+            off = file_end_;
+            file_end_ += bytes.size();
+        }
+        for (size_t done = 0; done < bytes.size();) {
+            const ssize_t w = ::pwrite(fd_, bytes.data() + done, bytes.size() - done,
+                                       off_t(off + done));
+            if (w <= 0)
+                IoError({"stitch data (temporary file)", off + done}, "write failed: {}",
+                        w < 0 ? ErrnoString(errno) : "no space");
+            done += size_t(w);
+        }
+        std::lock_guard lock(mutex_);
+        if (stored_[c].second == 0)
+            stored_[c] = {off, bytes.size()};
+    }
+    if (parts.edges.empty())
+        return std::make_shared<const ChartSeams>();
+    return std::make_shared<const ChartSeams>(blocks, std::move(parts.edges),
+                                              std::move(parts.targets), std::move(parts.normals));
+}
+
+ChartSeams SeamStitcher::Build(const BakeView& view, uint32_t c, SeamGraphStats* stats) const {
+    Parts parts = BuildParts(view, c, stats);
+    if (parts.edges.empty())
+        return {};
+    return ChartSeams(view.solution.radiosity ? 3 : 9, std::move(parts.edges),
+                      std::move(parts.targets), std::move(parts.normals));
+}
 
 uint64_t SeamStitcher::hits() const {
     std::lock_guard lock(mutex_);
@@ -255,7 +374,8 @@ std::shared_ptr<const SeamStitcher::Sides> SeamStitcher::SidesOf(const BakeView&
     return sides;
 }
 
-ChartSeams SeamStitcher::Chart(const BakeView& view, uint32_t c, SeamGraphStats* stats) const {
+SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
+                                              SeamGraphStats* stats) const {
     const int blocks = view.solution.radiosity ? 3 : 9;
     CHECK_LT(c, view.chart_count());
     // The neighbourhood in chart order: every chart with a vertex of c.
@@ -383,7 +503,7 @@ ChartSeams SeamStitcher::Chart(const BakeView& view, uint32_t c, SeamGraphStats*
     normals.erase(std::unique(normals.begin(), normals.end(),
                               [](const auto& x, const auto& y) { return x.first == y.first; }),
                   normals.end());
-    return ChartSeams(blocks, std::move(edges), std::move(targets), std::move(normals));
+    return {std::move(edges), std::move(targets), std::move(normals)};
 }
 
 std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* stats) {
@@ -392,7 +512,7 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
     SeamGraphStats sum;
     for (uint32_t c = 0; c < out.size(); ++c) {
         SeamGraphStats st;
-        out[c] = stitcher.Chart(view, c, &st);
+        out[c] = stitcher.Build(view, c, &st);
         sum.stitched_edges += st.stitched_edges;
         sum.fold_edges += st.fold_edges;
         sum.samples += st.samples;

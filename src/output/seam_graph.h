@@ -27,6 +27,7 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -70,16 +71,24 @@ struct SeamGraphStats {
 };
 
 // Builds charts' stitch data on demand and keeps the sampled sides of recently used charts
-// (a chart's neighbours are asked for again by the charts around it). Thread-safe.
+// (a chart's neighbours are asked for again by the charts around it). A chart's data, once
+// built, is kept in an unlinked temporary file and read back when asked for again (every
+// output goes through every chart), so it is built once per export. Thread-safe.
 class SeamStitcher {
 public:
-    // `cache_bytes`: the cap of the sampled sides kept between calls.
-    SeamStitcher(const BakeView& view, size_t cache_bytes);
+    // `cache_bytes`: the cap of the sampled sides kept between calls. The built data go to
+    // a temporary file in `temp_dir` (empty: $TMPDIR, else /tmp).
+    SeamStitcher(const BakeView& view, size_t cache_bytes, const std::string& temp_dir = {});
     ~SeamStitcher();
-    // Chart c's stitch data (empty when it has no stitched edge); stats, when given, gets
-    // the edges and fold edges whose later side is in c (so sums over charts count each
-    // once) and c's samples.
-    ChartSeams Chart(const BakeView& view, uint32_t c, SeamGraphStats* stats = nullptr) const;
+    SeamStitcher(const SeamStitcher&) = delete;
+    SeamStitcher& operator=(const SeamStitcher&) = delete;
+
+    // Chart c's stitch data (empty when it has no stitched edge): from the file when built
+    // before, else built (Build) and stored.
+    std::shared_ptr<const ChartSeams> Chart(const BakeView& view, uint32_t c) const;
+    // Builds chart c's stitch data; stats, when given, gets the edges and fold edges whose
+    // later side is in c (so sums over charts count each once) and c's samples.
+    ChartSeams Build(const BakeView& view, uint32_t c, SeamGraphStats* stats = nullptr) const;
     // Sampled charts served from the cache / sampled again.
     uint64_t hits() const;
     uint64_t misses() const;
@@ -87,6 +96,8 @@ public:
     struct Sides;  // one chart's sampled outline sides
 
 private:
+    struct Parts;  // a chart's data before its look-up grid is built
+    Parts BuildParts(const BakeView& view, uint32_t c, SeamGraphStats* stats) const;
     std::shared_ptr<const Sides> SidesOf(const BakeView& view, uint32_t c) const;
 
     std::vector<uint32_t> neighbour_start_, neighbours_;  // per chart, CSR, ascending
@@ -100,6 +111,11 @@ private:
     mutable std::unordered_map<uint32_t, Entry> cached_;
     mutable size_t cached_bytes_ = 0;
     mutable uint64_t hits_ = 0, misses_ = 0;
+    // The built charts' data in the temporary file: offset and size per chart (size 0:
+    // not built yet).
+    int fd_ = -1;
+    mutable std::vector<std::pair<uint64_t, uint64_t>> stored_;
+    mutable uint64_t file_end_ = 0;
 };
 
 // Every chart's stitch data (index = chart id; empty for a chart without stitched edges),

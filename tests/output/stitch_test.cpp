@@ -467,28 +467,29 @@ TEST_F(StitchTest, SameDataWhateverTheCacheAndTheOrder) {
     EXPECT_EQ(none.stitcher->hits(), 0u);
     EXPECT_GT(all.stitcher->hits(), 0u);
     EXPECT_EQ(all.stitcher->misses(), n);  // each chart sampled once
-    for (uint32_t c = 0; c < n; ++c) {
-        ASSERT_EQ(a[c]->edge_count(), b[c]->edge_count());
-        EXPECT_GT(a[c]->edge_count(), 0u);
-        for (size_t k = 0; k < a[c]->edge_count(); ++k) {
-            const SeamEdge &x = a[c]->edges()[k], &y = b[c]->edges()[k];
-            EXPECT_EQ(x.a, y.a);
-            EXPECT_EQ(x.b, y.b);
-            EXPECT_EQ(x.band, y.band);
-            EXPECT_EQ(x.count, y.count);
-            for (uint32_t s = 0; s < x.count; ++s) {
+    auto expect_same = [](const ChartSeams& x, const ChartSeams& y) {
+        ASSERT_EQ(x.edge_count(), y.edge_count());
+        for (size_t k = 0; k < x.edge_count(); ++k) {
+            const SeamEdge &ex = x.edges()[k], &ey = y.edges()[k];
+            EXPECT_EQ(ex.a, ey.a);
+            EXPECT_EQ(ex.b, ey.b);
+            EXPECT_EQ(ex.band, ey.band);
+            EXPECT_EQ(ex.count, ey.count);
+            for (uint32_t s = 0; s < ex.count; ++s) {
                 float tx[9], ty[9];
-                a[c]->Target(x, double(s) / (x.count - 1), tx);
-                b[c]->Target(y, double(s) / (y.count - 1), ty);
+                x.Target(ex, double(s) / (ex.count - 1), tx);
+                y.Target(ey, double(s) / (ey.count - 1), ty);
                 for (int k9 = 0; k9 < 9; ++k9)
                     EXPECT_EQ(tx[k9], ty[k9]);
             }
         }
-        ASSERT_EQ(a[c]->normals().size(), b[c]->normals().size());
-        for (size_t k = 0; k < a[c]->normals().size(); ++k) {
-            EXPECT_EQ(a[c]->normals()[k].first, b[c]->normals()[k].first);
-            EXPECT_EQ(a[c]->normals()[k].second, b[c]->normals()[k].second);
-        }
+        EXPECT_EQ(x.normals(), y.normals());
+    };
+    for (uint32_t c = 0; c < n; ++c) {
+        EXPECT_GT(a[c]->edge_count(), 0u);
+        expect_same(*a[c], *b[c]);
+        expect_same(*a[c], *none.Seams(c));  // read back from the view's file
+        expect_same(*a[c], none.stitcher->Build(none, c));
     }
     const Atlas atlas = PackAtlas(ChartResolutions(none));
     EXPECT_EQ(Page(none, atlas), Page(all, atlas));
