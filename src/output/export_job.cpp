@@ -16,7 +16,6 @@
 #include "output/vertex_colors.h"
 
 #include <atomic>
-#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -119,13 +118,6 @@ void MeasureAllSeams(const BakeView& view, nlohmann::json* j) {
                  ns.display.p95, ns.display.max);
 }
 
-std::string LowerExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& ch : ext)
-        ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    return ext;
-}
-
 // The light map's PNG pages for a .glb when the user asked for no PNG: temporary files,
 // removed when the export ends (or fails).
 struct TemporaryPngPages {
@@ -172,7 +164,7 @@ void RunExportJob(const ExportJobOptions& c) {
     std::string png = c.lightmap_png;
     TemporaryPngPages temporary;
     if (png.empty() && !c.lightmap.empty() && c.lightmap != "-" &&
-        LowerExtension(c.lightmap) == ".exr" && c.mesh != "-" && LowerExtension(c.mesh) == ".glb") {
+        Extension(c.lightmap) == ".exr" && c.mesh != "-" && Extension(c.mesh) == ".glb") {
         static std::atomic<int> serial{0};
         temporary.path = fmt::format("{}/mebake-{}-{}-lightmap.png", TemporaryDirectory(),
                                      getpid(), serial++);

@@ -20,13 +20,6 @@ namespace {
 // Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
 constexpr float kPi = float(std::numbers::pi);
 
-std::string Extension(const std::string& path) {
-    std::string e = std::filesystem::path(path).extension().string();
-    for (char& c : e)
-        c = char(std::tolower(static_cast<unsigned char>(c)));
-    return e;
-}
-
 // The tiles and shaders of a group of charts.
 struct ChartGroup {
     std::vector<stream::ChartTile> tiles;
@@ -171,6 +164,13 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
         emit(shelf.y, shelf.height);
     }
     emit_empty(pg.height);
+}
+
+std::string Extension(const std::string& path) {
+    std::string e = std::filesystem::path(path).extension().string();
+    for (char& c : e)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
 }
 
 std::string PagePath(const std::string& path, uint32_t page, uint32_t pages) {

@@ -66,6 +66,8 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
 // The file of page p: `path` itself for a one-page atlas, else UDIM-numbered
 // "name.<1001 + p>.ext" (page p = UDIM tile 1001 + p: u offset p % 10, v offset p / 10).
 std::string PagePath(const std::string& path, uint32_t page, uint32_t pages);
+// The extension of `path` in lower case (".exr"; empty when it has none).
+std::string Extension(const std::string& path);
 
 struct MapWriteOptions {
     io::ExrPixelType exr_type = io::ExrPixelType::Half;
