@@ -1,8 +1,9 @@
 // The graph of chart borders and the targets the stitched field meets along them
 // (seam_stitch.h). A chart-border edge is a mesh edge on the outline of two charts,
 // recognized by the same pair of global input vertex ids in both tiles (as the seam metric,
-// seams.h, finds it); edges where the surface folds (faces more than 45 degrees apart) are
-// left alone, since E differs there in any correct solution, and so are mesh borders.
+// seams.h, finds it). Creases (faces, or the charts' shading normals at either end, more than
+// 45 degrees apart) keep each side's own field, since E and B differ there in any correct
+// solution: they enter with zero correction. Mesh borders are left alone.
 //
 // One pass over the tiles (in batches, ForEachTile): each chart samples its own shown field
 // (continuous_field.h) at n + 1 points along every outline edge, n from the edge's 3D
@@ -58,7 +59,7 @@ constexpr float kFoldCos = 0.7071f;
 
 struct SeamGraphStats {
     uint64_t stitched_edges = 0;  // border edges with targets
-    uint64_t fold_edges = 0;      // left alone
+    uint64_t fold_edges = 0;      // creases: each side keeps its own field
     uint64_t samples = 0;         // targets over all edges and sides
 };
 
