@@ -126,16 +126,6 @@ void AddVertex(Collected& col, uint64_t g, const Side& s, bool last, int blocks)
     ++sum.n;
 }
 
-// A crease between two charts: their faces, or their shading normals at either end, more
-// than 45 degrees apart. Each chart's E holds the light above its own horizon and B follows
-// its own normal, so the two sides differ there in any correct solution (a scan's hard edge
-// with a normal per side: nefertiti's crown, bench/RESULTS.md "Issue 14 (session 8)").
-bool Crease(const Side& x, const Side& y) {
-    return Dot(x.normal, y.normal) < kFoldCos ||
-           Dot(Normalize(x.n0), Normalize(y.n0)) < kFoldCos ||
-           Dot(Normalize(x.n1), Normalize(y.n1)) < kFoldCos;
-}
-
 // A crease edge of one side with the side's own samples as targets: no correction along
 // it, so the corrections of stitched edges nearby fade to zero there instead of reaching
 // across it.
@@ -180,6 +170,14 @@ void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int b
 }
 
 }  // namespace
+
+// A scan's hard edge with a normal per side was stitched as one surface: nefertiti's crown
+// showed 0.61 where the path tracer has 1.84 (bench/RESULTS.md, "Issue 14 (session 8)").
+bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
+            const Vec3f& y1) {
+    return Dot(fx, fy) < kFoldCos || Dot(Normalize(x0), Normalize(y0)) < kFoldCos ||
+           Dot(Normalize(x1), Normalize(y1)) < kFoldCos;
+}
 
 std::vector<OutlineEdge> OutlineEdges(const stream::ChartTile& tile, uint64_t vertex_count) {
     struct E {
@@ -251,7 +249,8 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
                 const Side& other = it->second;
                 if (other.chart == c)
                     continue;  // a split vertex inside one chart
-                if (Crease(other, cs.sides[i])) {
+                const Side& own = cs.sides[i];
+                if (Crease(other.normal, own.normal, other.n0, own.n0, other.n1, own.n1)) {
                     AddCrease(col, other, blocks);
                     AddCrease(col, cs.sides[i], blocks);
                     ++st.fold_edges;

@@ -57,6 +57,14 @@ Vec3f FaceNormal(const stream::ChartTile& tile, uint32_t triangle);
 // Faces more than 45 degrees apart: a fold of the surface, not stitched nor measured.
 constexpr float kFoldCos = 0.7071f;
 
+// A crease between two charts' sides of a border edge: their faces (unit normals fx, fy), or
+// their shading normals at either end (x0/y0 at g0, x1/y1 at g1), more than 45 degrees
+// apart. Each chart's E holds the light above its own horizon and B follows its own normal,
+// so the sides differ there in any correct solution: neither the field's stitch nor the
+// light map's pulls them together.
+bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
+            const Vec3f& y1);
+
 struct SeamGraphStats {
     uint64_t stitched_edges = 0;  // border edges with targets
     uint64_t fold_edges = 0;      // creases: each side keeps its own field

@@ -363,6 +363,17 @@ TEST_F(StitchTest, CreaseInTheShadingNormalsKeepsEachSidesField) {
     for (size_t i = 0; i < own.size(); ++i)
         for (int k = 0; k < 3; ++k)
             EXPECT_NEAR(shown[i][k], own[i][k], 1e-5 * own[i][k]) << "point " << i;
+    // Nor does the light map's seam solve pull the texels of the two sides together: each
+    // side, filtered, shows its own B (linear per chart, so bilinear filtering is exact).
+    const Atlas atlas = PackAtlas(ChartResolutions(view));
+    const std::vector<float> page = Page(view, atlas);
+    for (const SeamPoint& sp : SeamPoints(o, 10))
+        for (const ChartPoint& p : {Locate(o, sp.cx0, sp.cy0, sp.x, sp.y),
+                                    Locate(o, sp.cx1, sp.cy1, sp.x, sp.y)}) {
+            const Vec3f f = Filtered(atlas, page, p), b = B(p);
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(f[k], b[k], 1e-3 * b[k]) << sp.x << ", " << sp.y;
+        }
 }
 
 TEST_F(StitchTest, StitchingStaysWithinThePerturbation) {
