@@ -99,11 +99,11 @@ struct Collected {
     std::unordered_set<Key, KeyHash> counted;  // (vertex, chart) already in `vertex`
 };
 
-// Weight of a side's value in a target: its brightness (luminance of n . E, or of B for a
-// radiosity solution) to the power kBrightPower, so a side much darker than the other
-// counts little. Where two charts disagree much, the darker one is nearly always the wrong
-// one (light lost to occluded virtual points, a shadow line one chart misplaced); see
-// docs/export.md.
+// Weight of a side's value in a target: its brightness as shown (luminance of n . E with
+// the side's shading normal n, or of B for a radiosity solution) to the power kBrightPower,
+// so a side much darker than the other counts little. Where two charts disagree much, the
+// darker one is nearly always the wrong one (light lost to occluded virtual points, a shadow
+// line one chart misplaced); see docs/export.md.
 double Weight(const float* v, const Vec3f& n, int blocks) {
     const float w[3] = {0.2126f, 0.7152f, 0.0722f};
     double y = 0;
@@ -118,12 +118,27 @@ void AddVertex(Collected& col, uint64_t g, const Side& s, bool last, int blocks)
     VertexSum& sum = col.vertex[g];
     sum.e.resize(size_t(blocks), 0.0);
     const float* v = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
-    const double w = Weight(v, s.normal, blocks);
+    const double w = Weight(v, Normalize(last ? s.n1 : s.n0), blocks);
     for (int b = 0; b < blocks; ++b)
         sum.e[size_t(b)] += w * double(v[b]);
     sum.weight += w;
     sum.normal += Vec3d(last ? s.n1 : s.n0);
     ++sum.n;
+}
+
+// A crease edge of one side with the side's own samples as targets: no correction along
+// it, so the corrections of stitched edges nearby fade to zero there instead of reaching
+// across it.
+void AddCrease(Collected& col, const Side& s, int blocks) {
+    auto& targets = col.targets[s.chart];
+    SeamEdge e;
+    e.a = s.a;
+    e.b = s.b;
+    e.band = s.band;
+    e.first = uint32_t(targets.size() / size_t(blocks));
+    e.count = s.intervals + 1;
+    targets.insert(targets.end(), s.vals.begin(), s.vals.end());
+    col.edges[s.chart].push_back(e);
 }
 
 // Records the edge (g0, g1) for both sides with the mean of their samples as targets.
@@ -139,7 +154,10 @@ void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int b
         for (uint32_t k = 0; k <= s->intervals; ++k) {
             const float* vx = &x.vals[size_t(k) * size_t(blocks)];
             const float* vy = &y.vals[size_t(k) * size_t(blocks)];
-            const double wx = Weight(vx, x.normal, blocks), wy = Weight(vy, y.normal, blocks);
+            // Each side's brightness with its shading normal there (interpolated as shown).
+            const float t = float(k) / float(s->intervals);
+            const double wx = Weight(vx, Normalize(x.n0 * (1 - t) + x.n1 * t), blocks),
+                         wy = Weight(vy, Normalize(y.n0 * (1 - t) + y.n1 * t), blocks);
             for (int b = 0; b < blocks; ++b)
                 targets.push_back(float((wx * vx[b] + wy * vy[b]) / (wx + wy)));
         }
@@ -152,6 +170,14 @@ void AddPair(Collected& col, const Key& key, const Side& x, const Side& y, int b
 }
 
 }  // namespace
+
+// A scan's hard edge with a normal per side was stitched as one surface: nefertiti's crown
+// showed 0.61 where the path tracer has 1.84 (bench/RESULTS.md, "Issue 14 (session 8)").
+bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
+            const Vec3f& y1) {
+    return Dot(fx, fy) < kFoldCos || Dot(Normalize(x0), Normalize(y0)) < kFoldCos ||
+           Dot(Normalize(x1), Normalize(y1)) < kFoldCos;
+}
 
 std::vector<OutlineEdge> OutlineEdges(const stream::ChartTile& tile, uint64_t vertex_count) {
     struct E {
@@ -223,9 +249,12 @@ std::vector<ChartSeams> BuildSeamStitch(const BakeView& view, SeamGraphStats* st
                 const Side& other = it->second;
                 if (other.chart == c)
                     continue;  // a split vertex inside one chart
-                if (Dot(other.normal, cs.sides[i].normal) < kFoldCos)
+                const Side& own = cs.sides[i];
+                if (Crease(other.normal, own.normal, other.n0, own.n0, other.n1, own.n1)) {
+                    AddCrease(col, other, blocks);
+                    AddCrease(col, cs.sides[i], blocks);
                     ++st.fold_edges;
-                else if (other.intervals == cs.sides[i].intervals) {
+                } else if (other.intervals == cs.sides[i].intervals) {
                     AddPair(col, cs.keys[i], other, cs.sides[i], blocks);
                     ++st.stitched_edges;
                 }
