@@ -1,0 +1,181 @@
+// TieSlaveNodes (slave_nodes.h): the finer side of every coarse-fine border takes the coarser
+// leaf's values at its nodes there.
+#include "solve/slave_nodes.h"
+
+#include "core/check.h"
+#include "solve/basis.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace mebake::solve {
+namespace {
+
+constexpr int kMaxNodes = kMaxOrder + 1;  // nodes per axis
+constexpr int kMaxBlocks = 9;
+
+// Coefficients of the 1-D Lagrange polynomial of node a (at a/M) in the orthonormal Legendre
+// basis: lagrange[a][i] = integral of l_a P~_i over [0,1], exact by the (M+1)-point rule.
+std::array<std::array<double, kMaxNodes>, kMaxNodes> LagrangeToLegendre(int order) {
+    std::array<std::array<double, kMaxNodes>, kMaxNodes> m{};
+    const GaussRule& g = Gauss(order + 1);
+    for (int p = 0; p <= order; ++p) {
+        double leg[kMaxNodes];
+        Legendre(order, g.x[p], leg);
+        for (int a = 0; a <= order; ++a) {
+            double l = 1;  // l_a(x_p)
+            for (int k = 0; k <= order; ++k)
+                if (k != a)
+                    l *= (g.x[p] - double(k) / order) / (double(a - k) / order);
+            for (int i = 0; i <= order; ++i)
+                m[size_t(a)][size_t(i)] += g.w[p] * l * leg[i];
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+SlaveNodeStats TieSlaveNodes(ChartField* field) {
+    SlaveNodeStats stats;
+    const int order = field->order(), blocks = field->blocks(), m1 = order + 1;
+    if (order == 0)
+        return stats;
+    CHECK_LE(blocks, kMaxBlocks);
+    const auto lagrange = LagrangeToLegendre(order);
+    double xs[kMaxNodes];
+    for (int a = 0; a <= order; ++a)
+        xs[a] = double(a) / order;
+
+    std::vector<size_t> leaves;
+    int deepest = 0;
+    for (size_t n = 0; n < field->node_count(); ++n) {
+        if (field->node(n).leaf()) {
+            leaves.push_back(n);
+            deepest = std::max(deepest, int(field->node(n).level));
+        }
+    }
+    std::stable_sort(leaves.begin(), leaves.end(), [&](size_t a, size_t b) {
+        return field->node(a).level < field->node(b).level;
+    });
+    // Smaller than any leaf: the four points this far from a node, diagonally, lie in the
+    // leaves whose closed squares hold the node.
+    const double nudge = std::ldexp(0.25, -deepest);
+
+    // One coefficient set (value or unshot) of the leaves [first, last) of one level: the
+    // changes of their border nodes, all computed before any is applied (leaves of the same
+    // level read each other's values as they were).
+    auto tie = [&](size_t first, size_t last, bool of_unshot) {
+        auto coeffs = [&](size_t node) {
+            return of_unshot ? field->unshot(node) : field->value(node);
+        };
+        std::vector<std::array<double, kMaxCoeffs * kMaxBlocks>> changes(last - first);
+        std::vector<bool> changed(last - first, false);
+        for (size_t q = first; q < last; ++q) {
+            const size_t n = leaves[q];
+            const QuadNode leaf = field->node(n);
+            float own[kMaxNodes * kMaxNodes * kMaxBlocks];
+            EvalTensorGrid(order, coeffs(n), blocks, xs, m1, xs, m1, own);
+            auto& dc = changes[q - first];
+            dc.fill(0);
+            float peak = 0;
+            for (int k = 0; k < m1 * m1 * blocks; ++k)
+                peak = std::max(peak, std::abs(own[k]));
+            bool slave = false, any = false;
+            for (int c = 0; c < m1; ++c) {
+                for (int a = 0; a < m1; ++a) {
+                    if (a != 0 && a != order && c != 0 && c != order)
+                        continue;  // interior node
+                    // The coarsest leaves whose closed squares hold the node.
+                    const double u = leaf.U(xs[a]), v = leaf.V(xs[c]);
+                    std::array<size_t, 4> holders{};
+                    int count = 0, level = int(leaf.level);
+                    bool finer = false;
+                    for (int d = 0; d < 4; ++d) {
+                        const double pu = u + (d & 1 ? nudge : -nudge);
+                        const double pv = v + (d & 2 ? nudge : -nudge);
+                        if (pu < 0 || pu > 1 || pv < 0 || pv > 1)
+                            continue;
+                        double s, t;
+                        const size_t h = field->LeafAt(pu, pv, &s, &t);
+                        const int hl = int(field->node(h).level);
+                        finer |= hl > int(leaf.level);
+                        if (hl > level || std::find(holders.begin(), holders.begin() + count, h) !=
+                                              holders.begin() + count)
+                            continue;
+                        if (hl < level)
+                            count = 0;
+                        level = hl;
+                        holders[size_t(count++)] = h;
+                    }
+                    // Nodes where leaves of one size meet keep their values; a node on a
+                    // coarser leaf, or a corner of this one where a finer leaf hangs (other
+                    // leaves of this size meeting there: their mean), is tied.
+                    if (count == 0 || (level == int(leaf.level) && !finer))
+                        continue;
+                    for (int i = 1; i < count; ++i)  // leaf-index order (a fixed sum)
+                        for (int k = i; k > 0 && holders[size_t(k)] < holders[size_t(k - 1)]; --k)
+                            std::swap(holders[size_t(k)], holders[size_t(k - 1)]);
+                    std::array<double, kMaxBlocks> target{};
+                    for (int i = 0; i < count; ++i) {
+                        const QuadNode& hn = field->node(holders[size_t(i)]);
+                        float hv[kMaxBlocks];
+                        EvalCoeffs(order, coeffs(holders[size_t(i)]), blocks,
+                                   std::clamp((u - hn.U(0)) / hn.size(), 0.0, 1.0),
+                                   std::clamp((v - hn.V(0)) / hn.size(), 0.0, 1.0), hv);
+                        for (int b = 0; b < blocks; ++b)
+                            target[size_t(b)] += hv[b];
+                    }
+                    slave |= level < int(leaf.level);
+                    const int node = a + m1 * c;
+                    for (int b = 0; b < blocks; ++b) {
+                        const double d = target[size_t(b)] / count - double(own[node * blocks + b]);
+                        if (d == 0)
+                            continue;
+                        any = true;
+                        for (int j = 0; j < m1; ++j)
+                            for (int i = 0; i < m1; ++i)
+                                dc[size_t(b * m1 * m1 + CoeffIndex(order, i, j))] +=
+                                    d * lagrange[size_t(a)][size_t(i)] *
+                                    lagrange[size_t(c)][size_t(j)];
+                    }
+                }
+            }
+            changed[q - first] = any;
+            if (of_unshot)
+                continue;
+            stats.slaves += slave ? 1 : 0;
+            double worst = 0;
+            for (int b = 0; b < blocks; ++b) {
+                double norm2 = 0;  // orthonormal basis: the L2 norm of the change
+                for (int k = 0; k < m1 * m1; ++k)
+                    norm2 += dc[size_t(b * m1 * m1 + k)] * dc[size_t(b * m1 * m1 + k)];
+                worst = std::max(worst, norm2);
+            }
+            if (peak > 0)
+                stats.largest_change = std::max(stats.largest_change, float(std::sqrt(worst) / peak));
+        }
+        for (size_t q = first; q < last; ++q) {
+            if (!changed[q - first])
+                continue;
+            float* out = coeffs(leaves[q]);
+            for (int k = 0; k < m1 * m1 * blocks; ++k)
+                out[k] = float(double(out[k]) + changes[q - first][size_t(k)]);
+        }
+    };
+    for (size_t first = 0; first < leaves.size();) {
+        size_t last = first;
+        while (last < leaves.size() && field->node(leaves[last]).level == field->node(leaves[first]).level)
+            ++last;
+        tie(first, last, false);
+        if (field->has_unshot())
+            tie(first, last, true);
+        first = last;
+    }
+    stats.leaves = leaves.size();
+    return stats;
+}
+
+}  // namespace mebake::solve
