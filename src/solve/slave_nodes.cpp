@@ -38,7 +38,7 @@ std::array<std::array<double, kMaxNodes>, kMaxNodes> LagrangeToLegendre(int orde
 
 }  // namespace
 
-SlaveNodeStats TieSlaveNodes(ChartField* field) {
+SlaveNodeStats TieSlaveNodes(ChartField* field, float tolerance, float floor) {
     SlaveNodeStats stats;
     const int order = field->order(), blocks = field->blocks(), m1 = order + 1;
     if (order == 0)
@@ -128,8 +128,8 @@ SlaveNodeStats TieSlaveNodes(ChartField* field) {
                         for (int b = 0; b < blocks; ++b)
                             target[size_t(b)] += hv[b];
                     }
-                    slave |= level < int(leaf.level);
                     const int node = a + m1 * c;
+                    slave |= level < int(leaf.level);
                     for (int b = 0; b < blocks; ++b) {
                         const double d = target[size_t(b)] / count - double(own[node * blocks + b]);
                         if (d == 0)
@@ -143,10 +143,6 @@ SlaveNodeStats TieSlaveNodes(ChartField* field) {
                     }
                 }
             }
-            changed[q - first] = any;
-            if (of_unshot)
-                continue;
-            stats.slaves += slave ? 1 : 0;
             double worst = 0;
             for (int b = 0; b < blocks; ++b) {
                 double norm2 = 0;  // orthonormal basis: the L2 norm of the change
@@ -154,6 +150,19 @@ SlaveNodeStats TieSlaveNodes(ChartField* field) {
                     norm2 += dc[size_t(b * m1 * m1 + k)] * dc[size_t(b * m1 * m1 + k)];
                 worst = std::max(worst, norm2);
             }
+            // The tie may move the leaf by the tolerance in L2 (seed 002's measure for
+            // a simplification); a larger change is a jump of the light itself (a contact
+            // line or shadow edge along the border, inside a leaf at the depth cap or at
+            // the edge of a coarser leaf the light-penumbra test does not sample there):
+            // the leaf keeps its own fit.
+            if (std::sqrt(worst) > tolerance * std::max(double(peak), double(floor))) {
+                stats.kept_jumps += of_unshot ? 0 : 1;
+                continue;
+            }
+            changed[q - first] = any;
+            if (of_unshot)
+                continue;
+            stats.slaves += slave ? 1 : 0;
             if (peak > 0)
                 stats.largest_change = std::max(stats.largest_change, float(std::sqrt(worst) / peak));
         }

@@ -8,9 +8,13 @@
 // leaves' traces become the coarser one's restricted, continuous along the whole side, not
 // only at the nodes. Where leaves of one size meet (a shared side, or a corner where two
 // coarser leaves touch diagonally next to a finer one, which would otherwise get two
-// values) the node takes their mean. Interior nodes keep their values. The result is C0
-// across every leaf border. --multi-emitter simplify applies it to the direct light
-// (refine_direct.cpp; docs/method.md, "Several sources").
+// values) the node takes their mean. Interior nodes keep their values. A leaf is tied only
+// where that moves it by at most the tolerance (of its largest nodal value) in L2, seed
+// 002's measure for a simplification; a larger change means a jump of the light itself
+// along the border (a contact line or shadow edge through a leaf at the depth cap) or a
+// coarser leaf whose edge its test did not sample (the light-penumbra test samples Gauss
+// points only), and the leaf keeps its own fit there. --multi-emitter simplify applies it
+// to the direct light (refine_direct.cpp; docs/method.md, "Several sources").
 #pragma once
 
 #include "solve/field.h"
@@ -21,16 +25,19 @@ namespace mebake::solve {
 
 struct SlaveNodeStats {
     size_t leaves = 0;  // leaves visited
-    size_t slaves = 0;  // leaves with a node on a coarser leaf's side (a T-vertex)
+    size_t slaves = 0;  // leaves tied with a node on a coarser leaf's side (a T-vertex)
     // Largest L2 norm (normalized node measure, worst block) of what a leaf's polynomial
     // changed by, over the leaf's largest nodal value (0 if none changed).
     float largest_change = 0;
+    size_t kept_jumps = 0;  // leaves left untied: the tie would move them by more than that
 };
 
 // Ties the border nodes of every leaf (value and unshot) as above. Leaves are visited coarse
 // to fine, one level at a time: a coarser leaf is final before finer ones read it, and
 // leaves of one level read each other as they were (sums in leaf-index order: deterministic).
-// Call ChartField::Pull() after. Order 0 has no nodes on the sides: nothing changes.
-SlaveNodeStats TieSlaveNodes(ChartField* field);
+// tolerance and floor as the fit's test: the scale of a leaf is its largest nodal value, at
+// least `floor`. Call ChartField::Pull() after. Order 0 has no nodes on the sides: nothing
+// changes.
+SlaveNodeStats TieSlaveNodes(ChartField* field, float tolerance, float floor);
 
 }  // namespace mebake::solve

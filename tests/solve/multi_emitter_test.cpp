@@ -210,10 +210,13 @@ TEST(MultiEmitter, BrightSecondLightWashesOutTheFirstsPenumbra) {
 // `s` borders a coarser leaf, over `peak`, at 8 points inside each side. With `simplified`
 // (full's solve of the same scene), only borders whose coarser leaf `full` refined further
 // count (seed 002's simplified/unsimplified borders); *borders gets their number.
-double CoarseFineJump(const Solver& s, double peak, const Solver* full, int* borders) {
+double CoarseFineJump(const Solver& s, double peak, const Solver* full, int* borders,
+                      int* continuous = nullptr) {
     const ChartField& f = s.fields()[0];
     double worst = 0;
     *borders = 0;
+    if (continuous)
+        *continuous = 0;
     for (size_t n = 0; n < f.node_count(); ++n) {
         const QuadNode& leaf = f.node(n);
         if (!leaf.leaf() || leaf.level == 0)
@@ -222,6 +225,7 @@ double CoarseFineJump(const Solver& s, double peak, const Solver* full, int* bor
             const bool along_t = side < 2;  // a side of constant s
             const double end = side % 2, out = end == 0 ? -1e-9 : 1e-9;
             bool counted = false;
+            double side_jump = 0;
             for (int k = 0; k < 8; ++k) {
                 const double e = (k + 0.5) / 8;
                 const double ls = along_t ? end : e, lt = along_t ? e : end;
@@ -243,19 +247,24 @@ double CoarseFineJump(const Solver& s, double peak, const Solver* full, int* bor
                 float a[9], b[9];
                 EvalCoeffs(f.order(), f.value(n), 9, ls, lt, a);
                 EvalCoeffs(f.order(), f.value(across), 9, ms, mt, b);
-                worst = std::max(worst, std::abs(double(a[1]) - double(b[1])) / peak);
+                side_jump = std::max(side_jump, std::abs(double(a[1]) - double(b[1])) / peak);
                 counted = true;
             }
+            worst = std::max(worst, side_jump);
             *borders += counted ? 1 : 0;
+            if (continuous && counted && side_jump < 2e-6)
+                ++*continuous;
         }
     }
     return worst;
 }
 
 // Seed 002's slave nodes: where simplify keeps a coarse leaf and finer leaves border it, the
-// finer leaves take its values along the common side (slave_nodes.h): the direct light is
-// continuous across the border. Full's field (not tied) jumps there, which shows the
-// measure sees jumps; the L2 bound to full still holds with the ties (CompareModes).
+// finer leaves take its values along the common side (slave_nodes.h), unless that would move
+// them by more than the tolerance in L2. Most coarse-fine sides are then continuous (a side
+// counts as continuous when it jumps by less than 2e-6 of the peak at 8 points); full's field
+// (not tied) is continuous on none of them, which shows the measure sees jumps. The L2 bound
+// to full holds with the ties (CompareModes).
 TEST(MultiEmitter, ContinuousAtTVerticesBetweenSimplifiedAndUnsimplifiedLeaves) {
     Fig7 f(1.0);
     Solver full(f.scene, f.charts, f.vis, Options(false, 2e-3));
@@ -266,16 +275,19 @@ TEST(MultiEmitter, ContinuousAtTVerticesBetweenSimplifiedAndUnsimplifiedLeaves) 
     for (int b = 0; b < 60; ++b)
         for (int a = 0; a < 60; ++a)
             peak = std::max(peak, Irradiance(full, -3 + 6 * (a + 0.5) / 60, -3 + 6 * (b + 0.5) / 60));
-    int borders = 0, simplified = 0, full_borders = 0;
-    const double all = CoarseFineJump(simple, peak, nullptr, &borders);
-    const double at_simplified = CoarseFineJump(simple, peak, &full, &simplified);
-    const double untied = CoarseFineJump(full, peak, nullptr, &full_borders);
-    std::printf("coarse-fine sides: simplify %d (%d on a simplified leaf), largest jump %.2e of "
-                "the peak; full (no ties) %d sides, largest jump %.2e\n",
-                borders, simplified, all, full_borders, untied);
+    int borders = 0, simplified = 0, full_borders = 0, cont = 0, cont_simplified = 0, full_cont = 0;
+    const double all = CoarseFineJump(simple, peak, nullptr, &borders, &cont);
+    const double at_simplified = CoarseFineJump(simple, peak, &full, &simplified, &cont_simplified);
+    const double untied = CoarseFineJump(full, peak, nullptr, &full_borders, &full_cont);
+    std::printf("coarse-fine sides: simplify %d, %d continuous (%d / %d on a simplified leaf), "
+                "largest jump %.2e (%.2e on a simplified leaf) of the peak; full (no ties) %d "
+                "sides, %d continuous, largest jump %.2e\n",
+                borders, cont, cont_simplified, simplified, all, at_simplified, full_borders,
+                full_cont, untied);
     EXPECT_GT(simplified, 20);
-    EXPECT_LT(all, 2e-6);
-    EXPECT_LT(at_simplified, 2e-6);
+    EXPECT_GT(cont_simplified, simplified / 2);
+    EXPECT_GT(cont, borders / 2);
+    EXPECT_LT(full_cont, full_borders / 10);
     EXPECT_GT(untied, 1e-4);
 }
 
