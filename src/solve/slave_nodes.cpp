@@ -36,6 +36,40 @@ std::array<std::array<double, kMaxNodes>, kMaxNodes> LagrangeToLegendre(int orde
     return m;
 }
 
+// The coarsest leaves whose closed squares hold chart point (u, v) (the leaves at the four
+// points `nudge` away diagonally, nudge smaller than any leaf), in leaf-index order (a fixed
+// sum), their level, and whether a leaf finer than `own_level` holds it too.
+struct Holders {
+    std::array<size_t, 4> leaf{};
+    int count = 0, level = 0;
+    bool finer = false;
+};
+Holders CoarsestHolders(const ChartField& field, double u, double v, int own_level, double nudge) {
+    Holders h;
+    h.level = own_level;
+    for (int d = 0; d < 4; ++d) {
+        const double pu = u + (d & 1 ? nudge : -nudge);
+        const double pv = v + (d & 2 ? nudge : -nudge);
+        if (pu < 0 || pu > 1 || pv < 0 || pv > 1)
+            continue;
+        double s, t;
+        const size_t n = field.LeafAt(pu, pv, &s, &t);
+        const int nl = int(field.node(n).level);
+        h.finer |= nl > own_level;
+        if (nl > h.level || std::find(h.leaf.begin(), h.leaf.begin() + h.count, n) !=
+                                h.leaf.begin() + h.count)
+            continue;
+        if (nl < h.level)
+            h.count = 0;
+        h.level = nl;
+        h.leaf[size_t(h.count++)] = n;
+    }
+    for (int i = 1; i < h.count; ++i)
+        for (int k = i; k > 0 && h.leaf[size_t(k)] < h.leaf[size_t(k - 1)]; --k)
+            std::swap(h.leaf[size_t(k)], h.leaf[size_t(k - 1)]);
+    return h;
+}
+
 }  // namespace
 
 SlaveNodeStats TieSlaveNodes(ChartField* field, float tolerance, float floor) {
@@ -88,50 +122,27 @@ SlaveNodeStats TieSlaveNodes(ChartField* field, float tolerance, float floor) {
                 for (int a = 0; a < m1; ++a) {
                     if (a != 0 && a != order && c != 0 && c != order)
                         continue;  // interior node
-                    // The coarsest leaves whose closed squares hold the node.
                     const double u = leaf.U(xs[a]), v = leaf.V(xs[c]);
-                    std::array<size_t, 4> holders{};
-                    int count = 0, level = int(leaf.level);
-                    bool finer = false;
-                    for (int d = 0; d < 4; ++d) {
-                        const double pu = u + (d & 1 ? nudge : -nudge);
-                        const double pv = v + (d & 2 ? nudge : -nudge);
-                        if (pu < 0 || pu > 1 || pv < 0 || pv > 1)
-                            continue;
-                        double s, t;
-                        const size_t h = field->LeafAt(pu, pv, &s, &t);
-                        const int hl = int(field->node(h).level);
-                        finer |= hl > int(leaf.level);
-                        if (hl > level || std::find(holders.begin(), holders.begin() + count, h) !=
-                                              holders.begin() + count)
-                            continue;
-                        if (hl < level)
-                            count = 0;
-                        level = hl;
-                        holders[size_t(count++)] = h;
-                    }
+                    const Holders h = CoarsestHolders(*field, u, v, int(leaf.level), nudge);
                     // Nodes where leaves of one size meet keep their values; a node on a
                     // coarser leaf, or a corner of this one where a finer leaf hangs (other
                     // leaves of this size meeting there: their mean), is tied.
-                    if (count == 0 || (level == int(leaf.level) && !finer))
+                    if (h.count == 0 || (h.level == int(leaf.level) && !h.finer))
                         continue;
-                    for (int i = 1; i < count; ++i)  // leaf-index order (a fixed sum)
-                        for (int k = i; k > 0 && holders[size_t(k)] < holders[size_t(k - 1)]; --k)
-                            std::swap(holders[size_t(k)], holders[size_t(k - 1)]);
-                    std::array<double, kMaxBlocks> target{};
-                    for (int i = 0; i < count; ++i) {
-                        const QuadNode& hn = field->node(holders[size_t(i)]);
+                    std::array<double, kMaxBlocks> target{};  // the holders' mean
+                    for (int i = 0; i < h.count; ++i) {
+                        const QuadNode& hn = field->node(h.leaf[size_t(i)]);
                         float hv[kMaxBlocks];
-                        EvalCoeffs(order, coeffs(holders[size_t(i)]), blocks,
+                        EvalCoeffs(order, coeffs(h.leaf[size_t(i)]), blocks,
                                    std::clamp((u - hn.U(0)) / hn.size(), 0.0, 1.0),
                                    std::clamp((v - hn.V(0)) / hn.size(), 0.0, 1.0), hv);
                         for (int b = 0; b < blocks; ++b)
                             target[size_t(b)] += hv[b];
                     }
                     const int node = a + m1 * c;
-                    slave |= level < int(leaf.level);
+                    slave |= h.level < int(leaf.level);
                     for (int b = 0; b < blocks; ++b) {
-                        const double d = target[size_t(b)] / count - double(own[node * blocks + b]);
+                        const double d = target[size_t(b)] / h.count - double(own[node * blocks + b]);
                         if (d == 0)
                             continue;
                         any = true;
