@@ -5,6 +5,7 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/units.h"
+#include "io/byte_stream.h"
 #include "output/bake_view.h"
 #include "output/probe.h"
 #include "reference/reference.h"
@@ -34,20 +35,11 @@ json J(const Vec2f& v) {
 }
 
 void WriteJson(const json& j, const std::string& path) {
-    if (path == "-") {
-        std::cout << j.dump(1) << "\n";
-        return;
-    }
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp);
-        if (!f)
-            IoError({tmp}, "cannot create");
-        f << j.dump(1) << "\n";
-        if (!f)
-            IoError({tmp}, "write failed");
-    }
-    fs::rename(tmp, path);
+    // Through io::OutputStream: a temporary renamed into place, or written straight to
+    // stdout, a device or a FIFO (renaming over /dev/null would replace the device).
+    auto out = io::OutputStream::Open(path);
+    out->Write(j.dump(1) + "\n");
+    out->Commit();
 }
 
 json ErrorJson(const output::ProbeError& e) {

@@ -80,7 +80,7 @@ Imf::Compression ToImf(ExrCompression c) {
 struct ExrWriter::Impl {
     std::string path, temp;
     int fd = -1;
-    bool to_stdout = false;
+    bool to_stream = false;  // stdout, a device or a FIFO: copied there at Commit()
     int width = 0, height = 0;
     std::vector<std::string> channels;
     ExrOptions options;
@@ -115,9 +115,14 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
     m.height = height;
     m.channels = std::move(channels);
     m.options = options;
-    m.to_stdout = m.path == "-";
-    if (m.to_stdout) {
-        // OpenEXR needs a seekable file: an unlinked temporary, copied to stdout at the end.
+    struct stat st {};
+    // "-", /dev/null or a named pipe: a temporary renamed over a device would replace it
+    // with a regular file, and OpenEXR needs a seekable file anyway: write an unlinked
+    // temporary and copy it to the stream at the end.
+    m.to_stream = m.path == "-" || (::stat(m.path.c_str(), &st) == 0 && !S_ISREG(st.st_mode));
+    if (m.to_stream) {
+        if (S_ISDIR(st.st_mode))
+            IoError({m.path}, "is a directory, expected an output file");
         m.fd = OpenTemporaryFile(TemporaryDirectory(), "EXR image");
     } else {
         std::filesystem::path p(m.path);
@@ -142,7 +147,7 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
         h.insert("comments", Imf::StringAttribute(options.comments));
     for (const auto& [key, value] : options.attributes)
         h.insert(key, Imf::StringAttribute(value));
-    m.stream = std::make_unique<FdOStream>(m.fd, m.to_stdout ? "<stdout>" : m.path);
+    m.stream = std::make_unique<FdOStream>(m.fd, m.path == "-" ? "<stdout>" : m.path);
     try {
         // No OpenEXR worker threads: TBB is mebake's only thread pool.
         m.file = std::make_unique<Imf::OutputFile>(*m.stream, h, 0);
@@ -213,8 +218,8 @@ void ExrWriter::Commit() {
     m.file.reset();
     if (!m.stream->error.empty())
         IoError({m.path}, "write failed: {}", m.stream->error);
-    if (m.to_stdout) {
-        auto out = OutputStream::Open("-");
+    if (m.to_stream) {
+        auto out = OutputStream::Open(m.path);
         std::vector<char> buf(size_t(1) << 20);
         off_t at = 0;
         for (;;) {

@@ -12,7 +12,8 @@
 // the pixels are), plus any the caller adds. The file is written to a temporary beside
 // the target and renamed into place by Commit(); "-" writes to stdout (through an
 // unlinked temporary, because the EXR line-offset table is written last and needs a
-// seekable file). Half channels saturate at +-65504 instead of becoming infinite.
+// seekable file), and a device or FIFO likewise (so /dev/null stays a device). Half
+// channels saturate at +-65504 instead of becoming infinite.
 #pragma once
 
 #include <memory>

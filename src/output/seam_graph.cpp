@@ -104,11 +104,11 @@ struct VertexSum {
     uint32_t n = 0;
 };
 
-// Weight of a side's value in a target: its brightness (luminance of n . E, or of B for a
-// radiosity solution) to the power kBrightPower, so a side much darker than the other
-// counts little. Where two charts disagree much, the darker one is nearly always the wrong
-// one (light lost to occluded virtual points, a shadow line one chart misplaced); see
-// docs/export.md.
+// Weight of a side's value in a target: its brightness as shown (luminance of n . E with
+// the side's shading normal n, or of B for a radiosity solution) to the power kBrightPower,
+// so a side much darker than the other counts little. Where two charts disagree much, the
+// darker one is nearly always the wrong one (light lost to occluded virtual points, a shadow
+// line one chart misplaced); see docs/export.md.
 double Weight(const float* v, const Vec3f& n, int blocks) {
     const float w[3] = {0.2126f, 0.7152f, 0.0722f};
     double y = 0;
@@ -129,7 +129,7 @@ struct VertexSums {
         VertexSum& v = sum[g];
         v.e.resize(size_t(blocks), 0.0);
         const float* val = &s.vals[size_t(last ? s.intervals : 0) * size_t(blocks)];
-        const double w = Weight(val, s.normal, blocks);
+        const double w = Weight(val, Normalize(last ? s.n1 : s.n0), blocks);
         for (int b = 0; b < blocks; ++b)
             v.e[size_t(b)] += w * double(val[b]);
         v.weight += w;
@@ -143,12 +143,22 @@ struct At {
     uint32_t slot = 0, index = 0;
 };
 
-// A stitched border edge: y is the side the pass meets second (it pairs with x, waiting).
+// A border edge of two charts: y is the side the pass meets second (it pairs with x,
+// waiting). A crease keeps each side's own samples as its targets.
 struct Pair {
     At x, y;
+    bool crease = false;
 };
 
 }  // namespace
+
+// A scan's hard edge with a normal per side was stitched as one surface: nefertiti's crown
+// showed 0.61 where the path tracer has 1.84 (bench/RESULTS.md, "Issue 14 (session 8)").
+bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
+            const Vec3f& y1) {
+    return Dot(fx, fy) < kFoldCos || Dot(Normalize(x0), Normalize(y0)) < kFoldCos ||
+           Dot(Normalize(x1), Normalize(y1)) < kFoldCos;
+}
 
 std::vector<OutlineEdge> OutlineEdges(const stream::ChartTile& tile, uint64_t vertex_count) {
     struct E {
@@ -426,11 +436,12 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
             if (waiting->slot == met[j].slot)
                 continue;  // a split vertex inside one chart
             const Side &x = side(*waiting), &y = side(met[j]);
-            if (Dot(x.normal, y.normal) < kFoldCos) {
+            if (Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1)) {
+                pairs.push_back({*waiting, met[j], true});
                 if (met[j].slot == self)
                     ++st.fold_edges;
             } else if (x.intervals == y.intervals) {
-                pairs.push_back({*waiting, met[j]});
+                pairs.push_back({*waiting, met[j], false});
             }
             waiting = nullptr;
         }
@@ -440,14 +451,16 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
         return a.y.slot != b.y.slot ? a.y.slot < b.y.slot : a.y.index < b.y.index;
     });
 
-    // c's edges in the order they are met, with the mean of both sides' samples.
+    // c's edges in the order they are met, with the mean of both sides' samples (a crease:
+    // c's own samples, no correction along it, so the corrections of stitched edges nearby
+    // fade to zero there instead of reaching across it).
     std::vector<SeamEdge> edges;
     std::vector<float> targets;
     std::vector<End> ends;
     for (const Pair& p : pairs) {
         if (p.x.slot != self && p.y.slot != self)
             continue;
-        if (p.y.slot == self)
+        if (p.y.slot == self && !p.crease)
             ++st.stitched_edges;
         const Side &x = side(p.x), &y = side(p.y), &s = p.x.slot == self ? x : y;
         SeamEdge e;
@@ -456,10 +469,18 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
         e.band = s.band;
         e.first = uint32_t(targets.size() / size_t(blocks));
         e.count = s.intervals + 1;
+        if (p.crease) {
+            targets.insert(targets.end(), s.vals.begin(), s.vals.end());
+            edges.push_back(e);
+            continue;
+        }
         for (uint32_t k = 0; k <= s.intervals; ++k) {
             const float* vx = &x.vals[size_t(k) * size_t(blocks)];
             const float* vy = &y.vals[size_t(k) * size_t(blocks)];
-            const double wx = Weight(vx, x.normal, blocks), wy = Weight(vy, y.normal, blocks);
+            // Each side's brightness with its shading normal there (interpolated as shown).
+            const float t = float(k) / float(s.intervals);
+            const double wx = Weight(vx, Normalize(x.n0 * (1 - t) + x.n1 * t), blocks),
+                         wy = Weight(vy, Normalize(y.n0 * (1 - t) + y.n1 * t), blocks);
             for (int b = 0; b < blocks; ++b)
                 targets.push_back(float((wx * vx[b] + wy * vy[b]) / (wx + wy)));
         }
@@ -479,13 +500,16 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
         end_vertices.push_back(end.g);
     std::sort(end_vertices.begin(), end_vertices.end());
     VertexSums vs;
-    for (const Pair& p : pairs)
+    for (const Pair& p : pairs) {
+        if (p.crease)
+            continue;
         for (const At a : {p.x, p.y})
             for (const bool last : {false, true}) {
                 const uint64_t g = last ? key(a).second : key(a).first;
                 if (std::binary_search(end_vertices.begin(), end_vertices.end(), g))
                     vs.Add(g, side(a), last, blocks);
             }
+    }
     std::vector<std::pair<uint32_t, Vec3f>> normals;
     for (const End& end : ends) {
         const VertexSum& sum = vs.sum.at(end.g);

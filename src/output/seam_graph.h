@@ -1,8 +1,9 @@
 // The graph of chart borders and the targets the stitched field meets along them
 // (seam_stitch.h). A chart-border edge is a mesh edge on the outline of two charts,
 // recognized by the same pair of global input vertex ids in both tiles (as the seam metric,
-// seams.h, finds it); edges where the surface folds (faces more than 45 degrees apart) are
-// left alone, since E differs there in any correct solution, and so are mesh borders.
+// seams.h, finds it). Creases (faces, or the charts' shading normals at either end, more than
+// 45 degrees apart) keep each side's own field, since E and B differ there in any correct
+// solution: they enter with zero correction. Mesh borders are left alone.
 //
 // The rule, as one pass over the tiles in chart order: each chart samples its own shown field
 // (continuous_field.h) at n + 1 points along every outline edge, n from the edge's 3D
@@ -64,9 +65,17 @@ Vec3f FaceNormal(const stream::ChartTile& tile, uint32_t triangle);
 // Faces more than 45 degrees apart: a fold of the surface, not stitched nor measured.
 constexpr float kFoldCos = 0.7071f;
 
+// A crease between two charts' sides of a border edge: their faces (unit normals fx, fy), or
+// their shading normals at either end (x0/y0 at g0, x1/y1 at g1), more than 45 degrees
+// apart. Each chart's E holds the light above its own horizon and B follows its own normal,
+// so the sides differ there in any correct solution: neither the field's stitch nor the
+// light map's pulls them together.
+bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
+            const Vec3f& y1);
+
 struct SeamGraphStats {
     uint64_t stitched_edges = 0;  // border edges with targets
-    uint64_t fold_edges = 0;      // left alone
+    uint64_t fold_edges = 0;      // creases: each side keeps its own field
     uint64_t samples = 0;         // targets over all edges and sides
 };
 

@@ -23,6 +23,7 @@ struct EdgeSamples {
     uint64_t g0 = 0, g1 = 0;             // g0 < g1
     std::array<float, kMaxSamples> y{};  // luminance at the samples, from g0 to g1
     Vec3f normal{};                      // the face beside the edge (unit)
+    Vec3f n0{}, n1{};                    // the chart's shading normals at g0 and g1
 };
 
 struct KeyHash {
@@ -36,7 +37,7 @@ struct KeyHash {
 struct Waiting {
     uint32_t chart;
     std::array<float, kMaxSamples> y;
-    Vec3f normal;
+    Vec3f normal, n0, n1;
 };
 
 // The outline edges of a tile (seam_graph.h) with B sampled along them.
@@ -55,6 +56,8 @@ std::vector<EdgeSamples> SampleOutline(const BakeView& view, uint32_t c,
         s.g0 = e.g0;
         s.g1 = e.g1;
         s.normal = FaceNormal(tile, e.triangle);
+        s.n0 = tile.normal[e.v0];
+        s.n1 = tile.normal[e.v1];
         for (int k = 0; k < samples; ++k) {
             const float t = (float(k) + 0.5f) / float(samples);
             float b[3] = {0, 0, 0};
@@ -93,13 +96,14 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
                 const auto key = std::make_pair(e.g0, e.g1);
                 auto it = waiting.find(key);
                 if (it == waiting.end()) {
-                    waiting.emplace(key, Waiting{c, e.y, e.normal});
+                    waiting.emplace(key, Waiting{c, e.y, e.normal, e.n0, e.n1});
                     continue;
                 }
                 if (it->second.chart == c)
                     continue;  // a split vertex inside one chart
-                if (Dot(it->second.normal, e.normal) < kFoldCos) {
-                    ++st.fold_edges;  // B jumps here on the surface itself
+                const Waiting& w = it->second;
+                if (Crease(w.normal, e.normal, w.n0, e.n0, w.n1, e.n1)) {
+                    ++st.fold_edges;  // B jumps here on the surface itself (not stitched either)
                     waiting.erase(it);
                     continue;
                 }

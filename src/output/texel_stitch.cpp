@@ -49,7 +49,8 @@ Footprint Bilinear(Vec2d p, uint32_t res) {
 struct EdgeSide {
     uint32_t chart = 0;
     Vec2f a, b;  // uv of g0, g1
-    Vec3f normal;
+    Vec3f normal;  // of the face beside the edge
+    Vec3f n0, n1;  // shading normals at g0, g1
 };
 
 // A chart's outline edges and the texels their bilinear footprints read, as shaded.
@@ -65,7 +66,8 @@ ChartPart PrepareChart(const BakeView& view, const Atlas& atlas, uint32_t c,
     ChartPart part;
     const uint32_t res = atlas.charts[c].resolution;
     for (const OutlineEdge& e : OutlineEdges(tile, view.manifest.vertex_count)) {
-        EdgeSide s{c, tile.uv[e.v0], tile.uv[e.v1], FaceNormal(tile, e.triangle)};
+        EdgeSide s{c, tile.uv[e.v0], tile.uv[e.v1], FaceNormal(tile, e.triangle),
+                   tile.normal[e.v0], tile.normal[e.v1]};
         // Footprints of points every 1/8 texel: every texel a seam sample can read (a sample
         // reading one not listed here is dropped; it can only graze a texel corner).
         const double len = Length(D(s.b) - D(s.a)) * res;
@@ -234,7 +236,8 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
                 }
                 if (it->second.chart == c)
                     continue;  // a split vertex inside one chart
-                if (Dot(it->second.normal, part.sides[i].normal) >= kFoldCos)
+                const EdgeSide &x = it->second, &y = part.sides[i];
+                if (!Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1))
                     add_pair(it->second, part.sides[i]);
                 waiting.erase(it);
             }

@@ -232,27 +232,40 @@ bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
 }
 
 // A receiver's visibility point is interpolated between geometry-image texel centres, and
-// on a convex bend that chord runs under the real surface: by more than the ray offset
-// where the surface turns fast within a texel (a crease, a rim, a fold of drapery), and
-// rays from there hit the surface they leave (nefertiti under the sky alone: whole nodes
-// at 7 % of their sky, bench/RESULTS.md, "Issue 14 (session 7)"). One ray along the normal
-// finds out: leaving through the back of a triangle within `reach_` means the point is
-// under the surface, and its visibility point moves to where the ray left it.
+// that chord leaves the real surface where it turns within a texel: on a convex bend it
+// runs under it (a rim, a fold of drapery), and rays from there hit the surface they leave
+// (nefertiti under the sky alone: whole nodes at 7 % of their sky, bench/RESULTS.md, "Issue
+// 14 (session 7)"); in a concave one it floats above it (the crevices of nefertiti's crown),
+// and rays from there pass over the rim that shades the real point ("Issue 14 (session
+// 8)"). Rays along the normal find out. Leaving through the back of a triangle within
+// `reach_` means the point is under the surface: it moves up to where the ray left. Else a
+// ray the other way meeting the front of a triangle within `reach_` means it is above: it
+// moves down onto it.
 std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint> points) const {
     std::vector<ReceiverPoint> out(points.begin(), points.end());
-    std::vector<Segment> segs(points.size());
-    for (size_t p = 0; p < points.size(); ++p) {
-        const Vec3f& o = points[p].vis_point;
-        const Vec3f& n = points[p].normal;
-        segs[p] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, reach_};
-    }
-    std::vector<Hit> hits(points.size());
-    TraceHits(vis_, segs, hits, RayKind::kOrigin);
-    for (size_t p = 0; p < points.size(); ++p) {
-        const Hit& h = hits[p];
-        const Vec3f ng(h.ng_x, h.ng_y, h.ng_z);
-        if (h.geom_id != kNoHit && Dot(ng, points[p].normal) > 0)
-            out[p].vis_point = points[p].vis_point + points[p].normal * h.t;
+    std::vector<size_t> which(points.size());
+    for (size_t p = 0; p < points.size(); ++p)
+        which[p] = p;
+    for (float dir : {1.f, -1.f}) {
+        std::vector<Segment> segs(which.size());
+        for (size_t k = 0; k < which.size(); ++k) {
+            const Vec3f& o = points[which[k]].vis_point;
+            const Vec3f n = points[which[k]].normal * dir;
+            segs[k] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, reach_};
+        }
+        std::vector<Hit> hits(which.size());
+        TraceHits(vis_, segs, hits, RayKind::kOrigin);
+        std::vector<size_t> still;  // not moved: looked at the other way
+        for (size_t k = 0; k < which.size(); ++k) {
+            const ReceiverPoint& rp = points[which[k]];
+            const Hit& h = hits[k];
+            // The back of a triangle going up, its front going down: ng along the normal.
+            if (h.geom_id != kNoHit && Dot(Vec3f(h.ng_x, h.ng_y, h.ng_z), rp.normal) > 0)
+                out[which[k]].vis_point = rp.vis_point + rp.normal * (dir * h.t);
+            else
+                still.push_back(which[k]);
+        }
+        which = std::move(still);
     }
     return out;
 }

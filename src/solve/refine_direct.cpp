@@ -12,6 +12,7 @@
 #include "solve/multi_emitter_debug.h"
 #include "solve/rays.h"
 #include "solve/shading.h"
+#include "solve/slave_nodes.h"
 #include "solve/solver.h"
 
 #include <algorithm>
@@ -310,11 +311,17 @@ void Solver::RefineDirect(uint32_t chart) {
         DirectSampler medium(*this, sc, std::min(order + 1, kMaxGauss - 1), max_level, direct);
         SimplifiedFit simplified{eb, fine, medium, chart};
         FitDirectLights(chart, sampler, min_level, max_level, &simplified);
+        // C0 at T-vertices: finer leaves take the coarser (simplified) leaf's values along
+        // their common side, leaves of one size their mean (slave_nodes.h).
+        const SlaveNodeStats slaves = TieSlaveNodes(
+            &fields_[chart], float(opt_.settings.tolerance), float(reference_ * 0.02));
+        fields_[chart].Pull();
         spdlog::debug("chart {}: multi-emitter: {} boundary samples ({:.4f} CPU s); nodes "
                       "tested closed-form {}, one light {}, light-penumbra kept {}, refined {}; "
-                      "fit {:.4f} CPU s",
+                      "{} leaves with T-vertices (largest change {:.4f}, {} jumps kept); fit {:.4f} CPU s",
                       chart, eb.sample_points(), cpu_boundary, simplified.closed, simplified.single,
-                      simplified.washed, simplified.marked,
+                      simplified.washed, simplified.marked, slaves.slaves, slaves.largest_change,
+                      slaves.kept_jumps,
                       ThreadCpuSeconds() - cpu_start - cpu_boundary);
         if (!opt_.multi_emitter_debug.empty())
             WriteMultiEmitterPng(fmt::format("{}/chart-{}.png", opt_.multi_emitter_debug, chart),

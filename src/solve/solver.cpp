@@ -57,12 +57,13 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
 }
 
 Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
-    // A smooth, continuous normal field: the geometry pyramid at 8 x 8 per chart,
-    // interpolated. Continuity matters: where light grazes, a horizon that jumped from
-    // node to node showed as blocks.
-    constexpr int kHorizonLevel = 3;
-    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()), u, v)
-        .normal;
+    // A continuous normal field: the chart's finest geometry level, interpolated.
+    // Continuity matters: where light grazes, a horizon that jumped from node to node
+    // showed as blocks. It must also follow the surface: the 8 x 8 level used before
+    // averaged the normals of a thin feature's rim (an ear, a leg, a fold) into a plane
+    // that faced away from lit points, which lost the key light there (bench/RESULTS.md,
+    // issue 14 session 8: the bunny's away-side picture 4.97 -> 3.29 %).
+    return SampleBilinear(sc.geometry, sc.geometry.finest_level(), u, v).normal;
 }
 
 Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,

@@ -10,7 +10,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fcntl.h>
 #include <fstream>
+#include <iterator>
+#include <sys/stat.h>
+#include <thread>
 #include <unistd.h>
 
 namespace mebake::io {
@@ -70,6 +74,51 @@ TEST_F(ExrTest, FloatRoundTripIsExact) {
     EXPECT_EQ(attr("software"), "mebake");
     EXPECT_EQ(attr("comments"), "test image");
     EXPECT_EQ(attr("mebakeContent"), "radiosity");
+}
+
+// A named pipe (like /dev/null, a device) gets the image written into it and stays what it
+// was: a temporary renamed over it would have replaced it with a regular file.
+TEST_F(ExrTest, ToANamedPipeTheBytesGoThroughAndThePipeStays) {
+    const int w = 6, h = 4;
+    const std::vector<std::string> names{"R", "G", "B"};
+    const auto px = Pattern(w, h, 3);
+    WriteExr(Path("file.exr"), w, h, names, px);
+    std::ifstream f(Path("file.exr"), std::ios::binary);
+    const std::string expected{std::istreambuf_iterator<char>(f), {}};
+
+    const std::string fifo = Path("pipe.exr");
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    // Both ends open before the write (a spare writer keeps the reader from seeing the end
+    // early), so a writer that never opens the pipe fails the test instead of hanging it.
+    const int rfd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+    ASSERT_GE(rfd, 0);
+    const int spare = ::open(fifo.c_str(), O_WRONLY);
+    ASSERT_GE(spare, 0);
+    ::fcntl(rfd, F_SETFL, ::fcntl(rfd, F_GETFL) & ~O_NONBLOCK);
+    std::string piped;
+    std::thread reader([&] {
+        char buf[4096];
+        for (ssize_t n; (n = ::read(rfd, buf, sizeof buf)) > 0;)
+            piped.append(buf, size_t(n));
+    });
+    try {
+        WriteExr(fifo, w, h, names, px);
+    } catch (...) {
+        ::close(spare);
+        reader.join();
+        ::close(rfd);
+        throw;
+    }
+    ::close(spare);
+    reader.join();
+    ::close(rfd);
+    EXPECT_EQ(piped, expected);
+    struct stat st {};
+    ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode));
+    for (const auto& e : fs::directory_iterator(dir_))  // no temporary left beside it
+        EXPECT_TRUE(e.path().filename() == "file.exr" || e.path().filename() == "pipe.exr")
+            << e.path();
 }
 
 TEST_F(ExrTest, HalfInBandsWithManyChannels) {

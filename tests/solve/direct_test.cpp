@@ -117,5 +117,38 @@ TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
     EXPECT_NEAR(sky_at(0.2f), 0, 1e-6);                   // deeper than the reach: blocked
 }
 
+// A visibility point a little above the surface (as the chord between geometry-image texels
+// floats over a concave bend) must take the light the surface below it gets, not pass over
+// the rim that shades it: a floor with a wall 0.01 high at x = 0.05 and a light far to
+// its side, low (3 degrees up at most): the floor at the origin is in the wall's umbra, a
+// point 0.02 above it sees the whole light. One higher than the reach stays where it is.
+TEST(DirectLight, VisibilityPointAboveTheSurfaceMovesOntoIt) {
+    Scene scene;
+    PolygonLight light;
+    light.vertices = {{10, 0.4, -0.1}, {10, 0.4, 0.1}, {10, 0.6, 0.1}, {10, 0.6, -0.1}};
+    light.radiance = {100, 100, 100};
+    light.two_sided = true;
+    scene.lights.push_back(light);
+    VisibilityScene vis;
+    std::vector<float> geo = {-1e4f, 0, -1e4f, -1e4f, 0, 1e4f, 1e4f, 0, 1e4f, 1e4f, 0, -1e4f,  // floor
+                              0.05f, 0, -1e4f, 0.05f, 0, 1e4f, 0.05f, 0.01f, 1e4f, 0.05f, 0.01f, -1e4f};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
+    vis.AddTriangles(geo, tris, "floor and wall");
+    vis.Commit();
+    const float offset = 1e-3f, reach = 0.05f;
+    DirectLight direct(scene, scene.solver, vis, offset, 100, reach);
+    auto light_at = [&](float height) {
+        std::vector<ReceiverPoint> pts = {{{0, height, 0}, {0, 1, 0}, {0, height, 0}}};
+        std::vector<float> e(9);
+        direct.Evaluate(pts, e);
+        return double(e[1]);
+    };
+    const double lit = IrradianceClipped(light.vertices, 100.0, Vec3d(0, 0.2, 0), Vec3d(0, 1, 0));
+    ASSERT_GT(lit, 0);
+    EXPECT_NEAR(light_at(0.f), 0, 1e-6);      // on the floor: in the wall's umbra
+    EXPECT_NEAR(light_at(0.02f), 0, 1e-6);    // above by 20 offsets: moved down, in umbra
+    EXPECT_NEAR(light_at(0.2f), lit, 0.02 * lit);  // higher than the reach: over the wall
+}
+
 }  // namespace
 }  // namespace mebake::solve
