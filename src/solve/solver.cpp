@@ -57,12 +57,26 @@ Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
 }
 
 Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
-    // A smooth, continuous normal field: the geometry pyramid at 8 x 8 per chart,
-    // interpolated. Continuity matters: where light grazes, a horizon that jumped from
-    // node to node showed as blocks.
-    constexpr int kHorizonLevel = 3;
-    return SampleBilinear(sc.geometry, std::min(kHorizonLevel, sc.geometry.finest_level()), u, v)
+    // A smooth, continuous normal field: the geometry pyramid at cells of a fixed number of
+    // light-map texels (stream::HorizonLevel; at least 8 x 8 per chart), interpolated.
+    // Continuity matters: where light grazes, a horizon that jumped from node to node showed
+    // as blocks. The cells follow world size, not the chart: at 8 x 8 per chart whatever its
+    // size, a merged chart's horizon tilted away from the surface over an ear and lit points
+    // went dark (bench/RESULTS.md, "Issue 13, part 1").
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    return SampleBilinear(sc.geometry,
+                          std::min(stream::HorizonLevel(texel_level), sc.geometry.finest_level()),
+                          u, v)
         .normal;
+}
+
+size_t Solver::NodeBudget(const SolveChart& sc) const {
+    // The budget follows the chart's light-map texels: at 8192 nodes whatever the size, the
+    // bunny's merged 512-texel charts stopped refining with their shadows half fitted
+    // (bench/RESULTS.md, "Issue 13 (session 8)").
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    const int extra = std::max(0, texel_level - kBudgetLevel);
+    return opt_.max_nodes_per_chart << (2 * extra);
 }
 
 Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
