@@ -466,7 +466,7 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         for (int c = 3; c >= 0; --c)
             fit(size_t(first + c));
     }
-    while (!queue.empty() && field.node_count() + 4 <= opt_.max_nodes_per_chart) {
+    while (!queue.empty() && field.node_count() + 4 <= NodeBudget(charts_[chart])) {
         const size_t n = queue.top().node;
         queue.pop();
         const int32_t first = field.Subdivide(n);
@@ -500,7 +500,7 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
     while (!stack.empty()) {
         const size_t n = stack.back();
         stack.pop_back();
-        const bool room = field.node_count() + 4 <= opt_.max_nodes_per_chart;
+        const bool room = field.node_count() + 4 <= NodeBudget(charts_[chart]);
         if (field.node(n).leaf() && int(field.node(n).level) < sky_level && room)
             field.Subdivide(n);
         const QuadNode node = field.node(n);

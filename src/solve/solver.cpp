@@ -66,6 +66,15 @@ Vec3f Solver::HorizonNormal(const SolveChart& sc, float u, float v) {
     return SampleBilinear(sc.geometry, sc.geometry.finest_level(), u, v).normal;
 }
 
+size_t Solver::NodeBudget(const SolveChart& sc) const {
+    // The budget follows the chart's light-map texels: at 8192 nodes whatever the size, the
+    // bunny's merged 512-texel charts stopped refining with their shadows half fitted
+    // (bench/RESULTS.md, "Issue 13 (session 8)").
+    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    const int extra = std::max(0, texel_level - kBudgetLevel);
+    return opt_.max_nodes_per_chart << (2 * extra);
+}
+
 Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
                        const stream::SurfaceSample& smp) {
     // Rays start from the finest geometry, not from the coarser level the point's E is

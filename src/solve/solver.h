@@ -46,7 +46,9 @@ struct SolveOptions {
     float scene_size = 1;           // bounding-box diagonal
     int min_level = 2;              // quadtrees start this deep
     int sky_level = 4;              // the sky is gathered from this level down (GatherSky)
-    size_t max_nodes_per_chart = 8192;  // refinement budget per chart
+    // Refinement budget of a chart of up to 128 x 128 light-map texels; a larger chart's
+    // grows with its texels (Solver::NodeBudget).
+    size_t max_nodes_per_chart = 8192;
     double receiver_tau = 0.5;      // gather at a node when its size / distance < tau
     double emitter_tau = 0.5;       // emitter sample size / distance
     int max_emitter_level = 5;      // finest emitter samples (32 x 32 per chart)
@@ -165,6 +167,8 @@ private:
     // for the chart-level link refinement (Gatherer::Shoot), otherwise the visibility in
     // [0, 1] of a cluster link evaluated at the chart's root without rays.
     static constexpr float kOpenLink = -1;
+    // Charts up to 2^kBudgetLevel texels a side get max_nodes_per_chart nodes (NodeBudget).
+    static constexpr int kBudgetLevel = 7;
     struct ClusterSample {
         Vec3f pos, nrm, org;  // org: the ray origin, off the surface
     };
@@ -194,6 +198,7 @@ private:
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
+    size_t NodeBudget(const SolveChart& sc) const;
     static Vec3f VisPoint(const SolveChart& sc, int level, float u, float v,
                           const stream::SurfaceSample& smp);
     void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,

@@ -24,11 +24,7 @@ namespace {
 
 // The power of two nearest (in log scale) to the texels the chart's square needs.
 uint32_t ResolutionFor(double scale, const ChartBuildOptions& opt) {
-    double want = scale / opt.texel_size;
-    uint32_t r = opt.min_resolution;
-    while (r < opt.max_resolution && double(r) * std::sqrt(2.0) < want)
-        r *= 2;
-    return r;
+    return ChartResolution(scale, opt.texel_size, opt.min_resolution, opt.max_resolution);
 }
 
 // Samples the master element into the finest level of its geometry image.
@@ -168,7 +164,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     sopt.lloyd_iterations = opt.lloyd_iterations;
     SegmentReport sreport;
     std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, &sreport);
-    uint64_t split_for[4] = {};  // distorted, flipped, not a disc, other
+    uint64_t split_for[4] = {};  // distorted, flipped or overlapping, not a disc, other
     ParamOptions popt;
     popt.max_jacobian_deviation = opt.max_distortion;
     popt.refine_options.max_iterations = opt.refine_iterations;
@@ -184,10 +180,19 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         // max_resolution, so it keeps every light-map texel it asks for).
         const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
         mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
+        // The turn bound stays on 8 x 8 cells per union (texel_size 0), coarser than the
+        // solver's horizon cells on a large chart: with cells of the horizon's 8 texels lucy
+        // merged to 86 charts but its error against the path tracer rose from 4.6 % to 7.1 %
+        // (bench/RESULTS.md, "Issue 13 (session 8)"), for a reason not found yet.
+        if (opt.merge_horizon_cells) {
+            mopt.texel_size = opt.texel_size;
+            mopt.min_resolution = opt.min_resolution;
+            mopt.max_resolution = opt.max_resolution;
+        }
         mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params);
     }
 
-    // Charts in id order; a chart that fails (not a disc, flipped, too distorted) is split
+    // Charts in id order; a chart that fails (not a disc, flipped or overlapping, too distorted) is split
     // in two and both halves go back to the front of the queue, so the order stays fixed.
     // A chart straight from the merge comes with its parameterization (the same bits
     // ParameterizeChart would give here).
@@ -220,7 +225,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         const bool can_split = chart.triangles.size() > 1 && depth < 24;
         if (param.status != ParamStatus::kOk && can_split &&
             (param.status == ParamStatus::kDistorted || !HasUv(param.status) ||
-             param.status == ParamStatus::kFlipped)) {
+             param.status == ParamStatus::kFlipped || param.status == ParamStatus::kOverlap)) {
             std::vector<uint32_t> half = SplitChart(chart, 2);
             uint32_t parts = 0;
             for (uint32_t h : half)
@@ -228,7 +233,9 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             if (parts >= 2) {
                 ++out.splits;
                 ++split_for[param.status == ParamStatus::kDistorted ? 0
-                            : param.status == ParamStatus::kFlipped ? 1
+                            : param.status == ParamStatus::kFlipped ||
+                                      param.status == ParamStatus::kOverlap
+                                ? 1
                             : param.status == ParamStatus::kNotDisc ? 2 : 3];
                 for (uint32_t p = parts; p-- > 0;)
                     queue.push_front({ExtractChart(chart, half, p), depth + 1, {}});
@@ -308,7 +315,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     spdlog::debug("brick {}: {} faces, {} components: {} seeds + {} inserted (deviation or "
                   "size) + {} leftovers, {} disc splits, {} small merged -> {} charts; "
                   "{} rounds merged {} of {} pairs tried ({} borders mostly fold) -> {} charts; "
-                  "parameterization splits: {} distorted, {} flipped, {} not a disc, {} other "
+                  "parameterization splits: {} distorted, {} flipped or overlapping, {} not a disc, {} other "
                   "-> {} charts",
                   brick, mesh.triangles.size(), sreport.components, sreport.initial_seeds,
                   sreport.inserted_seeds, sreport.leftover_charts, sreport.split_charts,

@@ -45,6 +45,10 @@ struct ChartBuildOptions {
     // Merge neighbouring charts while their union still parameterizes within the rule
     // (chart_merge.h).
     bool merge_charts = true;
+    // Bound the union's turning on the solver's horizon cells (texels) instead of 8 x 8
+    // cells per chart: fewer charts (lucy 86 against 234), not yet as accurate (see
+    // chart_builder.cpp).
+    bool merge_horizon_cells = false;
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 

@@ -15,6 +15,7 @@
 
 #include "core/check.h"
 #include "core/parallel.h"
+#include "stream/geometry_image.h"
 #include "stream/topology.h"
 
 #include <algorithm>
@@ -178,26 +179,27 @@ std::vector<Vec3d> SmoothFaceNormals(const TriMesh& piece) {
     return face;
 }
 
-// How far the surface turns inside the cells of an 8 x 8 grid over the chart's square,
-// in degrees: the 95 % area quantile of the angle between the mean normal of each cell of
-// a finer grid and that of the 8 x 8 cell holding it. The solver takes a point's horizon
-// (light below it does not count) from the 8 x 8 level of the chart's geometry pyramid
-// (solve/solver.cpp, HorizonNormal): on a chart that turns a lot inside one such cell the
-// horizon tilts away from the surface and lit points go dark (the bunny's ear tip at 85 %
-// error in one merged chart). The finer grid is 32 x 32, or coarser so that its cells hold
-// about 4 triangles each: a scan's noise is not curvature, and where the 8 x 8 cells hold
-// only a few triangles the horizon follows the surface anyway (spread 0).
-double CellSpread(const TriMesh& piece, const std::vector<Vec2f>& uv, double fill) {
-    constexpr int kCoarse = 8;
+// How far the surface turns inside the cells of a grid over the chart's square (`cells`
+// cells a side: 8, or the solver's horizon cells, MergeOptions::texel_size), in degrees: the
+// 95 % area quantile of the angle between the mean normal of each cell of a finer grid and
+// that of the coarse cell holding it. The solver takes a point's horizon (light below it
+// does not count) from a level of the chart's geometry pyramid (solve/solver.cpp,
+// HorizonNormal): on a chart that turns a lot inside one such cell the horizon tilts away
+// from the surface and lit points go dark (the bunny's ear tip at 85 % error in one merged
+// chart, while the horizon was 8 x 8 cells per chart). The finer grid has 4 x 4 cells per
+// horizon cell, or fewer so that its cells hold about 4 triangles each: a scan's noise is
+// not curvature, and where the horizon cells hold only a few triangles the horizon follows
+// the surface anyway (spread 0).
+double CellSpread(const TriMesh& piece, const std::vector<Vec2f>& uv, double fill, int cells) {
     constexpr double kPerCell = 4;  // triangles per fine cell
-    int nf = 32;
-    while (nf > kCoarse && double(piece.triangle_count()) < kPerCell * nf * nf * fill)
+    int nf = 4 * cells;
+    while (nf > cells && double(piece.triangle_count()) < kPerCell * nf * nf * fill)
         nf /= 2;
-    if (nf <= kCoarse)
+    if (nf <= cells)
         return 0;
-    const int ratio = nf / kCoarse;
+    const int ratio = nf / cells;
     const std::vector<Vec3d> normal = SmoothFaceNormals(piece);
-    std::vector<Vec3d> fine(size_t(nf * nf)), coarse(kCoarse * kCoarse);
+    std::vector<Vec3d> fine(size_t(nf * nf)), coarse(size_t(cells * cells));
     for (size_t f = 0; f < piece.triangle_count(); ++f) {
         const Tri& t = piece.triangles[f];
         const Vec3d n = normal[f];
@@ -206,14 +208,14 @@ double CellSpread(const TriMesh& piece, const std::vector<Vec2f>& uv, double fil
         const int ix = std::clamp(int(cx * nf), 0, nf - 1);
         const int iy = std::clamp(int(cy * nf), 0, nf - 1);
         fine[size_t(iy * nf + ix)] += n;  // |n| = twice the area: area-weighted
-        coarse[size_t((iy / ratio) * kCoarse + ix / ratio)] += n;
+        coarse[size_t((iy / ratio) * cells + ix / ratio)] += n;
     }
     std::vector<std::pair<double, double>> angle_area;
     double total = 0;
     for (int iy = 0; iy < nf; ++iy)
         for (int ix = 0; ix < nf; ++ix) {
             const Vec3d& f = fine[size_t(iy * nf + ix)];
-            const Vec3d& c = coarse[size_t((iy / ratio) * kCoarse + ix / ratio)];
+            const Vec3d& c = coarse[size_t((iy / ratio) * cells + ix / ratio)];
             const double w = Length(f);
             if (!(w > 0) || !(Length(c) > 0))
                 continue;
@@ -231,6 +233,14 @@ double CellSpread(const TriMesh& piece, const std::vector<Vec2f>& uv, double fil
     return 0;
 }
 
+// Cells a side of the solver's horizon grid on a chart of this scale (geometry_image.h).
+int HorizonCells(double scale, const MergeOptions& o) {
+    if (!(o.texel_size > 0))
+        return 8;
+    return 1 << HorizonLevel(LevelOf(
+                    ChartResolution(scale, o.texel_size, o.min_resolution, o.max_resolution)));
+}
+
 Trial Try(const TriMesh& piece, const MergeOptions& o) {
     Trial t;
     if (piece.vertex_count() > o.max_chart_vertices)
@@ -240,7 +250,8 @@ Trial Try(const TriMesh& piece, const MergeOptions& o) {
     const bool ok = p.status == ParamStatus::kOk && p.metrics.flipped == 0 &&
                     p.scale <= o.max_scale &&
                     p.metrics.jacobian_deviation_mean <= o.max_mean_deviation &&
-                    CellSpread(piece, p.uv, 1 - p.metrics.virtual_fraction) <= o.max_cell_spread_deg;
+                    CellSpread(piece, p.uv, 1 - p.metrics.virtual_fraction,
+                               HorizonCells(p.scale, o)) <= o.max_cell_spread_deg;
     if (ok)
         t.square = p.scale * p.scale;
     return t;

@@ -29,15 +29,23 @@ struct MergeOptions {
     // 27K-triangle charts merged into 18 cost 10 CPU-s of ingest, more than the solve
     // gained). The chart builder passes the segmentation's target chart size.
     uint32_t max_union_triangles = 30000;
-    // How far a union's surface may turn inside one cell of an 8 x 8 grid over its square
-    // (degrees; chart_merge.cpp, CellSpread): the solver's horizons come from that grid.
-    // Measured on the bunny against the path tracer (the same 1959 points, M2): no bound,
-    // 15 charts, 3.43 % RMS (max 83 %, at an ear tip); 25 degrees, 23 charts, 2.64 %;
-    // 20 degrees, 28 charts, 2.55 %; unmerged, 37 charts, 2.50 %.
+    // How far a union's surface may turn inside one cell of the solver's horizon grid
+    // (degrees; chart_merge.cpp, CellSpread): cells of 2^kHorizonCellLevels light-map
+    // texels, at least 8 x 8 per chart (geometry_image.h, HorizonLevel), given texel_size;
+    // with texel_size 0, 8 x 8 cells per chart. With 8 x 8 cells per chart whatever its size
+    // (before the solver's horizon followed the texel), measured on the bunny against the
+    // path tracer (the same 1959 points, M2): no bound, 15 charts, 3.43 % RMS (max 83 %, at
+    // an ear tip); 25 degrees, 23 charts, 2.64 %; 20 degrees, 28 charts, 2.55 %; unmerged,
+    // 37 charts, 2.50 %.
     double max_cell_spread_deg = 20;
     // Largest square side in 3D units (ParamChart::scale): the light map's largest chart
     // resolution times the texel size, so that a union never loses light-map texels.
     double max_scale = 1e300;
+    // The light map's texel (3D units) and its range of chart resolutions (chart_builder.h),
+    // for the union's resolution, which sets its horizon cells.
+    double texel_size = 0;
+    uint32_t min_resolution = 4;
+    uint32_t max_resolution = 2048;
     // A border that is mostly fold (faces meeting at more than this angle) is a real edge
     // of the shape: the charts on both sides stay apart.
     double fold_deg = 70;

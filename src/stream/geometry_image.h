@@ -28,6 +28,36 @@ struct GeometryTexel {
 };
 static_assert(sizeof(GeometryTexel) == 64);
 
+// The solver's per-chart resolutions follow the chart's size in light-map texels (a world
+// size: every chart has the same texel size), not the chart: a chart of 2^T texels a side
+// takes its horizon (Solver::HorizonNormal: light below it does not count) from level
+// HorizonLevel(T) of its geometry pyramid, cells of 2^kHorizonCellLevels texels, never
+// coarser than 8 x 8. Chart merging (chart_merge.h) bounds how far the surface turns inside
+// one such cell, so the same rule decides both.
+inline constexpr int kHorizonCellLevels = 3;
+inline int HorizonLevel(int texel_level) {
+    return std::max(3, texel_level - kHorizonCellLevels);
+}
+
+// The light-map resolution of a chart whose unit square is `scale` long in 3D: the power of
+// two (within [min_resolution, max_resolution]) that gives texels at most sqrt(2) x
+// texel_size.
+inline uint32_t ChartResolution(double scale, double texel_size, uint32_t min_resolution,
+                                uint32_t max_resolution) {
+    const double want = scale / texel_size;
+    uint32_t r = min_resolution;
+    while (r < max_resolution && double(r) * std::sqrt(2.0) < want)
+        r *= 2;
+    return r;
+}
+
+inline int LevelOf(uint32_t resolution) {
+    int level = 0;
+    while ((1u << level) < resolution)
+        ++level;
+    return level;
+}
+
 struct GeometryImage {
     uint32_t resolution = 0;  // finest level, power of two
     // levels[l] has (2^l)^2 texels, row-major (index = j * 2^l + i); levels.back() is finest.

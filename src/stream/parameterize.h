@@ -61,13 +61,27 @@ enum class ParamStatus {
     kSolverFailed,  // the sparse factorization failed
     // A parameterization was computed (uv, metrics filled) but the chart should be split.
     kFlipped,    // some uv triangles are flipped or degenerate
+    kOverlap,    // no flips, but the map is not one-to-one: parts of the chart overlap in uv
     kDistorted,  // jacobian_deviation_coarse above ParamOptions::max_jacobian_deviation
 };
 
 const char* ParamStatusName(ParamStatus status);
-// True when uv, scale and metrics are filled in (kOk, kFlipped, kDistorted).
+// A map is one-to-one enough when at most kMaxOverlap of its points are covered twice,
+// tested on a grid of kOverlapResolution points a side (the largest merged chart's
+// light-map resolution, chart_builder.h). Scan noise at a chart's border makes thin
+// overlaps that hold a few texels; a wrapped chart holds whole regions twice.
+inline constexpr uint32_t kOverlapResolution = 512;
+inline constexpr double kMaxOverlap = 0.01;
+
+// The fraction of the covered points of a res x res grid of centres over the square that
+// lie strictly inside more than one uv triangle.
+double UvOverlapFraction(std::span<const std::array<uint32_t, 3>> triangles,
+                         std::span<const Vec2f> uv, uint32_t res);
+
+// True when uv, scale and metrics are filled in (kOk, kFlipped, kOverlap, kDistorted).
 inline bool HasUv(ParamStatus s) {
-    return s == ParamStatus::kOk || s == ParamStatus::kFlipped || s == ParamStatus::kDistorted;
+    return s == ParamStatus::kOk || s == ParamStatus::kFlipped || s == ParamStatus::kOverlap ||
+           s == ParamStatus::kDistorted;
 }
 
 enum class ParamInit {

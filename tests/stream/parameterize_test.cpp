@@ -186,6 +186,31 @@ TEST(ParameterizeChart, PlaneIsAnIsometry) {
     }
 }
 
+TEST(UvOverlapFraction, SharedEdgesAreNotOverlapsAndStackedTrianglesAre) {
+    const std::vector<Vec2f> uv = {{0.1f, 0.1f}, {0.9f, 0.1f}, {0.9f, 0.9f}, {0.1f, 0.9f},
+                                   {0.3f, 0.3f}, {0.7f, 0.3f}, {0.3f, 0.7f}};
+    const std::vector<std::array<uint32_t, 3>> square = {{0, 1, 2}, {0, 2, 3}};
+    EXPECT_EQ(UvOverlapFraction(square, uv, 512), 0.0);
+    std::vector<std::array<uint32_t, 3>> stacked = square;
+    stacked.push_back({4, 5, 6});  // 0.08 of the square's 0.64, covered twice
+    EXPECT_NEAR(UvOverlapFraction(stacked, uv, 512), 0.08 / 0.64, 0.01);
+}
+
+// A ramp winding one and a half turns around an axis, rising slowly: nearly isometric to a
+// flat annulus of 540 degrees, so its natural flattening has no flipped triangle but
+// covers a third of itself twice. It must not pass as a chart.
+TEST(ParameterizeChart, RampWindingOnItselfOverlaps) {
+    const TriMesh m = GridPatch(17, 7, [](double x, double y) {
+        const double angle = 3 * kPi * y, r = 1 + 0.5 * x;
+        return Vec3d(r * std::cos(angle), r * std::sin(angle), 0.05 * angle);
+    }, 0);
+    const ChartParam p = ParameterizeChart(m, ParamOptions{});
+    ASSERT_TRUE(HasUv(p.status)) << p.message;
+    EXPECT_EQ(p.metrics.flipped, 0u);
+    EXPECT_EQ(p.status, ParamStatus::kOverlap) << p.message;
+    EXPECT_GT(UvOverlapFraction(m.triangles, p.uv, kOverlapResolution), 0.1);
+}
+
 TEST(ParameterizeChart, QuarterCylinderIsDevelopable) {
     const TriMesh m = GridPatch(33, 2, QuarterCylinder);
     const ChartParam lscm = ParameterizeChart(m, LscmOnly());
