@@ -26,14 +26,6 @@ struct EdgeSamples {
     Vec3f n0{}, n1{};                    // the chart's shading normals at g0 and g1
 };
 
-struct KeyHash {
-    size_t operator()(const std::pair<uint64_t, uint64_t>& k) const {
-        uint64_t h = k.first * 0x9E3779B97F4A7C15ull ^ (k.second + 0x632BE59BD9B4E019ull);
-        h ^= h >> 31;
-        return size_t(h * 0xBF58476D1CE4E5B9ull);
-    }
-};
-
 struct Waiting {
     uint32_t chart;
     std::array<float, kMaxSamples> y;
@@ -77,7 +69,7 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     if (opt.samples < 1 || opt.samples > kMaxSamples)
         UsageError("seam samples {}: expected 1 to {}", opt.samples, kMaxSamples);
     const size_t ns = size_t(opt.samples);
-    std::unordered_map<std::pair<uint64_t, uint64_t>, Waiting, KeyHash> waiting;
+    std::unordered_map<IdPair, Waiting, IdPairHash> waiting;
     struct Sample {
         float diff, level;
         uint32_t edge;

@@ -29,8 +29,8 @@ struct MergeOptions {
     // 27K-triangle charts merged into 18 cost 10 CPU-s of ingest, more than the solve
     // gained). The chart builder passes the segmentation's target chart size.
     uint32_t max_union_triangles = 30000;
-    // How far a union's surface may turn inside one cell of the solver's horizon grid
-    // (degrees; chart_merge.cpp, CellSpread): cells of 2^kHorizonCellLevels light-map
+    // How far a union's surface may turn inside one cell (degrees; chart_merge.cpp,
+    // CellSpread; the bound was made for the solver's former 8 x 8 horizon): cells of 2^kHorizonCellLevels light-map
     // texels, at least 8 x 8 per chart (geometry_image.h, HorizonLevel), given texel_size;
     // with texel_size 0, 8 x 8 cells per chart. With 8 x 8 cells per chart whatever its size
     // (before the solver's horizon followed the texel), measured on the bunny against the

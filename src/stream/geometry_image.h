@@ -28,12 +28,11 @@ struct GeometryTexel {
 };
 static_assert(sizeof(GeometryTexel) == 64);
 
-// The solver's per-chart resolutions follow the chart's size in light-map texels (a world
-// size: every chart has the same texel size), not the chart: a chart of 2^T texels a side
-// takes its horizon (Solver::HorizonNormal: light below it does not count) from level
-// HorizonLevel(T) of its geometry pyramid, cells of 2^kHorizonCellLevels texels, never
-// coarser than 8 x 8. Chart merging (chart_merge.h) bounds how far the surface turns inside
-// one such cell, so the same rule decides both.
+// Cells of a world size for chart merging's turn bound (chart_merge.h,
+// merge_horizon_cells): a chart of 2^T light-map texels a side (every chart has the same
+// texel size) is measured on level HorizonLevel(T) of its geometry pyramid, cells of
+// 2^kHorizonCellLevels texels, never coarser than 8 x 8. The solver's horizon
+// (Solver::HorizonNormal) is the finest level, which no cell of this size is coarser than.
 inline constexpr int kHorizonCellLevels = 3;
 inline int HorizonLevel(int texel_level) {
     return std::max(3, texel_level - kHorizonCellLevels);
