@@ -26,7 +26,16 @@ struct ReceiverPoint {
     // in closed form. Callers pass a smooth normal (the quadtree node's), not the scan's
     // noisy per-point one, so E stays smooth; zero means no horizon (visibility only).
     Vec3f horizon{};
+    // The plane of the real surface at the visibility point (the face there; set by
+    // DirectLight itself): light below it is blocked by the surface, as in the path
+    // tracer. Zero: not known (no cut).
+    Vec3f face{};
 };
+
+// Whether direction w (from the point) lies above its horizon and its face plane.
+inline bool AboveSurface(const ReceiverPoint& rp, const Vec3f& w) {
+    return Dot(w, rp.horizon) >= 0 && Dot(w, rp.face) >= 0;
+}
 
 // Where a probe point sits, to find it again: the chart's geometry level it was sampled at
 // and its chart coordinates (exact float bits; node corners shared by neighbours, parents
@@ -125,8 +134,9 @@ private:
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
-    // The points with their visibility points moved up onto the real surface where they
-    // lie under it (one ray each along the normal, at most reach_ long).
+    // The points with their visibility points moved onto the real surface where they lie
+    // under or above it (one ray each along the normal, at most reach_ long), and, for
+    // points with a horizon, the plane of the face under their shadow-ray origin (`face`).
     std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,

@@ -95,18 +95,18 @@ private:
     size_t CornerIndex(const Cell& c, int k) const { return VertexIndex(c.t, c.a[k], c.b[k]); }
 
     // Per point: the sign that turns the Lambert sum into E (all cells lie in the light's
-    // plane with its winding), and whether the horizon plane cuts the light at all.
+    // plane with its winding), and whether the horizon or the face plane cuts the light.
     void PrepareHorizons() {
         sign_.resize(penumbra_.size());
         cut_.resize(penumbra_.size());
         for (size_t q = 0; q < penumbra_.size(); ++q) {
             const ReceiverPoint& rp = points_[penumbra_[q]];
-            const Vec3d x(rp.position), h(rp.horizon);
+            const Vec3d x(rp.position), h(rp.horizon), f(rp.face);
             const double side = Dot(x - l_.vertices[0], l_.normal);
             sign_[q] = side > 0 ? -0.5 : l_.two_sided && side < 0 ? 0.5 : 0.0;
             cut_[q] = 0;
             for (const auto& v : l_.vertices)
-                cut_[q] |= Dot(v - x, h) < 0;
+                cut_[q] |= Dot(v - x, h) < 0 || Dot(v - x, f) < 0;
         }
     }
 
@@ -134,7 +134,7 @@ private:
         return cells;
     }
 
-    // The cell's E if it were wholly visible, above the point's horizon.
+    // The cell's E if it were wholly visible, above the point's horizon and face plane.
     Vec3d ClosedForm(const Cell& c) const {
         const Vec3d tri[3] = {l_.grid_pos[CornerIndex(c, 0)], l_.grid_pos[CornerIndex(c, 1)],
                               l_.grid_pos[CornerIndex(c, 2)]};
@@ -142,11 +142,16 @@ private:
         const Vec3d x(rp.position);
         if (!cut_[c.q])
             return LambertSum(tri, 3, x) * sign_[c.q];
-        Vec3d poly[6];
+        Vec3d poly[6], both[12];
         const int n = ClipToHalfSpace(tri, 3, x, Vec3d(rp.horizon), poly);
         if (n < 3)
             return Vec3d{};
-        return LambertSum(poly, n, x) * sign_[c.q];
+        if (Dot(rp.face, rp.face) == 0)
+            return LambertSum(poly, n, x) * sign_[c.q];
+        const int m = ClipToHalfSpace(poly, n, x, Vec3d(rp.face), both);
+        if (m < 3)
+            return Vec3d{};
+        return LambertSum(both, m, x) * sign_[c.q];
     }
 
     Vec3f Origin(uint32_t q) const {
@@ -161,7 +166,10 @@ private:
     double Height(uint32_t q, size_t v) const {
         const ReceiverPoint& rp = points_[penumbra_[q]];
         const Vec3d d = l_.grid_pos[v] - Vec3d(rp.position);
-        return Dot(d, Vec3d(rp.horizon)) / std::max(Length(d), 1e-30);
+        double h = Dot(d, Vec3d(rp.horizon));
+        if (Dot(rp.face, rp.face) > 0)
+            h = std::min(h, Dot(d, Vec3d(rp.face)));
+        return h / std::max(Length(d), 1e-30);
     }
     bool Above(uint32_t q, size_t v) const { return !cut_[q] || Height(q, v) >= -kHorizonMargin; }
     bool Below(const Cell& c) const {

@@ -150,5 +150,63 @@ TEST(DirectLight, VisibilityPointAboveTheSurfaceMovesOntoIt) {
     EXPECT_NEAR(light_at(0.2f), lit, 0.02 * lit);  // higher than the reach: over the wall
 }
 
+// A fold of large faces: the point's face is tilted 10 degrees from the smooth horizon the
+// caller gives, and a small light sits 5 degrees above that horizon but 5 below the face's
+// plane. The path tracer has it blocked by the surface itself (reference.cpp); the shadow
+// rays, offset along the smooth normal, cross the face's plane beyond the ridge and escape.
+struct FoldScene {
+    Scene scene;
+    VisibilityScene vis;
+    PolygonLight light;
+    Vec3f face_normal;
+    FoldScene() {
+        const double d = std::numbers::pi / 180, up = std::sin(5 * d), ahead = std::cos(5 * d);
+        const Vec3d c(0, 10 * up, 10 * ahead), a(1, 0, 0), b(0, ahead, -up);
+        const double h = 0.1;
+        light.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
+        light.radiance = {100, 100, 100};
+        light.two_sided = true;
+        scene.lights.push_back(light);
+        // Face A: y = z tan(10 deg) up to the ridge at z = 0.005; face B falls away beyond
+        // it; patch C lies flat, far to the side, and sees the light.
+        const float t = float(std::tan(10 * d)), r = 0.005f;
+        face_normal = Normalize(Vec3f(0, 1, -t));
+        std::vector<float> geo = {-1, -t, -1, 1, -t, -1, 1, r * t, r, -1, r * t, r,  // A
+                                  1, -1, 1, -1, -1, 1,                                // B
+                                  4, 0, -1, 6, 0, -1, 6, 0, 1, 4, 0, 1};               // C
+        std::vector<uint32_t> tris = {0, 2, 1, 0, 3, 2, 3, 4, 2, 3, 5, 4, 6, 8, 7, 6, 9, 8};
+        vis.AddTriangles(geo, tris, "fold");
+        vis.Commit();
+    }
+};
+
+TEST(DirectLight, LightBelowThePointsFaceIsBlockedByIt) {
+    FoldScene f;
+    const float offset = 1e-3f, reach = 0.05f;
+    DirectLight direct(f.scene, f.scene.solver, f.vis, offset, 100, reach);
+    const Vec3f n(0, 1, 0);
+    // The shadow ray from the offset origin crosses the face's plane beyond the ridge.
+    const double d = std::numbers::pi / 180;
+    const double cross_z = offset / (std::cos(5 * d) * std::tan(10 * d) - std::sin(5 * d)) * std::cos(5 * d);
+    ASSERT_GT(cross_z, 0.005);
+    std::vector<ReceiverPoint> on_fold = {{{0, 0, 0}, n, {0, 0, 0}, n}};
+    std::vector<float> e(9);
+    direct.Evaluate(on_fold, e, DirectLight::kLights);
+    EXPECT_NEAR(e[1], 0.0, 1e-9);  // without the face plane: 0.0035, the full closed form
+    std::vector<ReceiverPoint> on_flat = {{{5, 0, 0}, n, {5, 0, 0}, n}};
+    direct.Evaluate(on_flat, e, DirectLight::kLights);
+    const double lit = IrradianceClipped(f.light.vertices, 100.0, Vec3d(5, 0, 0), Vec3d(0, 1, 0));
+    ASSERT_GT(lit, 0);
+    EXPECT_NEAR(e[1], lit, 1e-3 * lit);
+    // Without a horizon (visibility only) nothing changes: the ray escapes over the ridge.
+    std::vector<ReceiverPoint> no_horizon = {{{0, 0, 0}, n, {0, 0, 0}}};
+    direct.Evaluate(no_horizon, e, DirectLight::kLights);
+    EXPECT_GT(e[1], 0.5 * lit);
+    // The refinement sees the fold as an edge of the light: hidden on A, seen on C.
+    std::vector<ReceiverPoint> both = {on_fold[0], on_flat[0]};
+    EXPECT_TRUE(direct.ShadowEdgeAmong(both));
+    EXPECT_FALSE(direct.ShadowEdgeAmong(on_flat));
+}
+
 }  // namespace
 }  // namespace mebake::solve
