@@ -128,14 +128,21 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     Vec3d n{}, c{};
     Vec2f uv{};
     bool colored = !tile_.color.empty();
+    Vec3d shared{};
     for (int k = 0; k < 3; ++k) {
         uv += tile_.uv[f[k]] * b[k];
-        n += Vec3d(Normals()[f[k]]) * double(b[k]);
+        n += Vec3d(tile_.normal[f[k]]) * double(b[k]);
+        shared += Vec3d(Normals()[f[k]]) * double(b[k]);
         const Vec3f ck = Color(f[k]);
         if (ck.x < 0)
             colored = false;
         c += Vec3d(ck) * double(b[k]);
     }
+    // The stitched normals of border vertices hold on the border and fade out with the
+    // stitch's band: spread over whole triangles they turned lucy's shading from the
+    // mesh's (bench/RESULTS.md, "Issue 14 (session 9)").
+    if (!normal_.empty())
+        n += (shared - n) * seams_->Fade(uv.x, uv.y);
     n = Normalize(n);
     if (!(Dot(n, n) > 0)) {
         const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);

@@ -71,14 +71,13 @@ void ChartSeams::Target(const SeamEdge& e, double t, float* out) const {
         out[b] = s0[b] + f * (s1[b] - s0[b]);
 }
 
-void ChartSeams::Apply(const ContinuousField& field, double u, double v, float* val) const {
+template <typename F>
+void ChartSeams::ForEdgesAt(double u, double v, F&& f) const {
     if (edges_.empty())
         return;
     u = std::clamp(u, 0.0, 1.0);
     v = std::clamp(v, 0.0, 1.0);
     const size_t cell = size_t(Cell(v, n_)) * n_ + Cell(u, n_);
-    double sum[9] = {}, weights = 0, fade = 0;
-    float target[9], own[9];
     for (uint32_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
         const SeamEdge& e = edges_[cell_edges_[k]];
         const double ex = double(e.b.x) - e.a.x, ey = double(e.b.y) - e.a.y;
@@ -90,7 +89,14 @@ void ChartSeams::Apply(const ContinuousField& field, double u, double v, float* 
         if (d >= double(e.band))
             continue;
         const double s = 1 - d / double(e.band);
-        const double phi = s * s * (3 - 2 * s);
+        f(e, t, pu, pv, d, s * s * (3 - 2 * s));
+    }
+}
+
+void ChartSeams::Apply(const ContinuousField& field, double u, double v, float* val) const {
+    double sum[9] = {}, weights = 0, fade = 0;
+    float target[9], own[9];
+    ForEdgesAt(u, v, [&](const SeamEdge& e, double t, double pu, double pv, double d, double phi) {
         fade = std::max(fade, phi);
         // On the edge itself the weight is finite but dwarfs every other edge's.
         const double w = phi / std::max(d * d, 1e-30);
@@ -99,11 +105,19 @@ void ChartSeams::Apply(const ContinuousField& field, double u, double v, float* 
         for (int b = 0; b < blocks_; ++b)
             sum[b] += w * (double(target[b]) - double(own[b]));
         weights += w;
-    }
+    });
     if (!(weights > 0))
         return;
     for (int b = 0; b < blocks_; ++b)
         val[b] = float(double(val[b]) + fade * sum[b] / weights);
+}
+
+double ChartSeams::Fade(double u, double v) const {
+    double fade = 0;
+    ForEdgesAt(u, v, [&](const SeamEdge&, double, double, double, double, double phi) {
+        fade = std::max(fade, phi);
+    });
+    return fade;
 }
 
 }  // namespace mebake::output

@@ -15,7 +15,8 @@
 // The inverse-distance weights make E* = S_e(t) exactly on an edge (from both sides) and
 // keep E* continuous everywhere (Shepard interpolation of the border corrections); beyond
 // every band the chart shows its own field. The shading normals of the edges' vertices are
-// made one as well (the mean of their copies), so B is one value from both sides. Vector irradiance
+// made one as well (the mean of their copies), blended in by the same fade, so B is one
+// value from both sides and each chart's own normals hold beyond the band. Vector irradiance
 // is a world-space quantity, so the mean of both sides' E is meaningful; B then follows with each
 // side's shading normal.
 #pragma once
@@ -54,8 +55,17 @@ public:
     void Target(const SeamEdge& e, double t, float* out) const;
     // val holds field's value at (u, v); adds the stitch correction to it.
     void Apply(const ContinuousField& field, double u, double v, float* val) const;
+    // How much of the stitch holds at (u, v): 1 on a border edge, 0 beyond every band (the
+    // `fade` above). The shared shading normals blend in with it, so that beyond the band
+    // each chart shades with its own vertex normals, as the mesh (and the path tracer) does.
+    double Fade(double u, double v) const;
 
 private:
+    // f(edge, t, pu, pv, d, phi) for every edge whose band holds (u, v): the nearest point
+    // (pu, pv) of the edge at parameter t, at distance d, and the blend phi(d) there.
+    template <typename F>
+    void ForEdgesAt(double u, double v, F&& f) const;
+
     int blocks_ = 0;
     std::vector<SeamEdge> edges_;
     std::vector<float> targets_;

@@ -376,6 +376,34 @@ TEST_F(StitchTest, CreaseInTheShadingNormalsKeepsEachSidesField) {
         }
 }
 
+// Per-chart vertex normals 17 degrees apart (not a crease), exact fields: the stitched
+// normals make B one value on the border (BordersShowOneValue), and beyond the stitch's band
+// each chart shades with its own normals, as the mesh and the path tracer do. Spread over
+// whole triangles, the mean normal of a border vertex reached 0.3 of a chart inside here and
+// six texels into lucy's triangles, and lowered its pictures (bench/RESULTS.md, issue 14
+// session 9).
+TEST_F(StitchTest, OwnNormalsBeyondTheBand) {
+    GridOptions o;
+    o.tilt = 0.3f;
+    WriteGridBake(dir_, o);
+    const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
+    const BakeView view = OpenBakeView(dir_);
+    std::vector<Vec3f> own, shown;
+    for (const BakeView* v : {&raw, &view}) {
+        LoadShaders(*v);
+        for (int cy = 0; cy < o.ky; ++cy)
+            for (int cx = 0; cx < o.kx; ++cx)
+                for (double fy : {0.3, 0.5, 0.7})
+                    for (double fx : {0.3, 0.5, 0.7})
+                        (v == &raw ? own : shown)
+                            .push_back(B(Locate(o, cx, cy, cx + fx, cy + fy)));
+    }
+    ASSERT_EQ(own.size(), shown.size());
+    for (size_t i = 0; i < own.size(); ++i)
+        for (int k = 0; k < 3; ++k)
+            EXPECT_NEAR(shown[i][k], own[i][k], 1e-5 * own[i][k]) << "point " << i;
+}
+
 TEST_F(StitchTest, StitchingStaysWithinThePerturbation) {
     const GridOptions o = Perturbed();
     WriteGridBake(dir_, o);
