@@ -224,6 +224,25 @@ protected:
     Vec3f B(const ChartPoint& p) const {
         return shaders_[p.chart]->Radiosity(shaders_[p.chart]->AtUv(p.uv));
     }
+    // B in every chart (cx, cy) of `view` at the world points (cx + x, cy + y).
+    std::vector<Vec3f> BInEveryChart(const GridOptions& o, const BakeView& view,
+                                     std::initializer_list<double> xs,
+                                     std::initializer_list<double> ys) {
+        LoadShaders(view);
+        std::vector<Vec3f> out;
+        for (int cy = 0; cy < o.ky; ++cy)
+            for (int cx = 0; cx < o.kx; ++cx)
+                for (double y : ys)
+                    for (double x : xs)
+                        out.push_back(B(Locate(o, cx, cy, cx + x, cy + y)));
+        return out;
+    }
+    static void ExpectSame(const std::vector<Vec3f>& shown, const std::vector<Vec3f>& own) {
+        ASSERT_EQ(own.size(), shown.size());
+        for (size_t i = 0; i < own.size(); ++i)
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(shown[i][k], own[i][k], 1e-5 * own[i][k]) << "point " << i;
+    }
 
     // The light map (one page) as a viewer filters it bilinearly at chart point uv.
     Vec3f Filtered(const Atlas& atlas, const std::vector<float>& page, const ChartPoint& p) const {
@@ -349,20 +368,9 @@ TEST_F(StitchTest, CreaseInTheShadingNormalsKeepsEachSidesField) {
     BuildSeamStitch(view, &gs);
     EXPECT_EQ(gs.stitched_edges, 0u);
     EXPECT_EQ(gs.fold_edges, uint64_t(o.m * ((o.kx - 1) * o.ky + o.kx * (o.ky - 1))));
-    std::vector<Vec3f> own, shown;
-    for (const BakeView* v : {&raw, &view}) {
-        LoadShaders(*v);
-        for (int cy = 0; cy < o.ky; ++cy)
-            for (int cx = 0; cx < o.kx; ++cx)
-                for (double fy : {0.0, 0.01, 0.3, 0.99, 1.0})
-                    for (double fx : {0.0, 0.02, 0.5, 0.98, 1.0})
-                        (v == &raw ? own : shown)
-                            .push_back(B(Locate(o, cx, cy, cx + fx, cy + fy)));
-    }
-    ASSERT_EQ(own.size(), shown.size());
-    for (size_t i = 0; i < own.size(); ++i)
-        for (int k = 0; k < 3; ++k)
-            EXPECT_NEAR(shown[i][k], own[i][k], 1e-5 * own[i][k]) << "point " << i;
+    ExpectSame(BInEveryChart(o, view, {0.0, 0.02, 0.5, 0.98, 1.0}, {0.0, 0.01, 0.3, 0.99, 1.0}),
+               BInEveryChart(o, raw, {0.0, 0.02, 0.5, 0.98, 1.0}, {0.0, 0.01, 0.3, 0.99, 1.0}));
+    LoadShaders(view);
     // Nor does the light map's seam solve pull the texels of the two sides together: each
     // side, filtered, shows its own B (linear per chart, so bilinear filtering is exact).
     const Atlas atlas = PackAtlas(ChartResolutions(view));
@@ -388,20 +396,8 @@ TEST_F(StitchTest, OwnNormalsBeyondTheBand) {
     WriteGridBake(dir_, o);
     const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
     const BakeView view = OpenBakeView(dir_);
-    std::vector<Vec3f> own, shown;
-    for (const BakeView* v : {&raw, &view}) {
-        LoadShaders(*v);
-        for (int cy = 0; cy < o.ky; ++cy)
-            for (int cx = 0; cx < o.kx; ++cx)
-                for (double fy : {0.3, 0.5, 0.7})
-                    for (double fx : {0.3, 0.5, 0.7})
-                        (v == &raw ? own : shown)
-                            .push_back(B(Locate(o, cx, cy, cx + fx, cy + fy)));
-    }
-    ASSERT_EQ(own.size(), shown.size());
-    for (size_t i = 0; i < own.size(); ++i)
-        for (int k = 0; k < 3; ++k)
-            EXPECT_NEAR(shown[i][k], own[i][k], 1e-5 * own[i][k]) << "point " << i;
+    ExpectSame(BInEveryChart(o, view, {0.3, 0.5, 0.7}, {0.3, 0.5, 0.7}),
+               BInEveryChart(o, raw, {0.3, 0.5, 0.7}, {0.3, 0.5, 0.7}));
 }
 
 TEST_F(StitchTest, StitchingStaysWithinThePerturbation) {
