@@ -457,18 +457,19 @@ private:
             pend[k] += coeffs_[size_t(k)];
     }
 
-    // Visibility of every pair of the link. With more pairs than twice `link_probes`, a
-    // stratified subset is traced first: when those rays agree (the link wholly visible or
-    // wholly hidden, the usual case for a link small against its distance), their answer
-    // stands for every pair; only partial links trace the other pairs, and keep the
-    // probes' answers (tracing the probes twice cost 8 of a partial link's 44 rays).
+    // Visibility of every pair of the link. A stratified subset of link_probes pairs (at
+    // most half of them: 4 of a 3 x 3-point link to one texel) is traced first: when those
+    // rays agree (the link wholly visible or wholly hidden, the usual case), their answer
+    // stands for every pair; only partial links trace the other pairs, keeping the probes'
+    // answers, so a partial link costs one ray per pair as without probes.
     void TraceLink() {
-        const size_t n = pairs_.size(), probes = size_t(std::max(0, s_.opt_.link_probes));
-        if (probes == 0 || n <= 2 * probes) {
+        const size_t n = pairs_.size();
+        const size_t probes = std::min(size_t(std::max(0, s_.opt_.link_probes)), n / 2);
+        if (probes < 2) {
             batch_.Trace(s_.vis_, RayKind::kLink);
             return;
         }
-        // Probe k is pair (2k + 1) n / (2 probes): increasing, and distinct as n > 2 probes.
+        // Probe k is pair (2k + 1) n / (2 probes): increasing, and distinct as n >= 2 probes.
         auto probe_pair = [&](size_t k) { return (2 * k + 1) * n / (2 * probes); };
         probe_.Clear();
         for (size_t k = 0; k < probes; ++k)
