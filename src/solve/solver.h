@@ -70,8 +70,8 @@ struct SolveOptions {
     int cluster_rays_per_chart = 2;
     double cluster_tau = 1;         // a cluster links when its radius / distance <= this
     double cluster_tolerance = 0.01;
-    // Chart-level links with more pairs than twice this trace this many stratified pairs
-    // first and trace the rest only when those disagree (0: one ray per pair always).
+    // Chart-level links trace this many stratified pairs first (at most half of their
+    // pairs) and the rest only when those disagree (0: one ray per pair always).
     int link_probes = 8;
     // --multi-emitter simplify: write each chart's classification and refinement as
     // DIR/chart-N.png here (multi_emitter_debug.h); empty: none.

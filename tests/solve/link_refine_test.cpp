@@ -139,11 +139,13 @@ struct BoxRun {
     SolveStats stats;
 };
 
-BoxRun SolveBox(double link_tolerance) {
-    testing::LitBox box(5, 32);
+BoxRun SolveBox(double link_tolerance, bool block = false,
+               int link_probes = SolveOptions{}.link_probes) {
+    testing::LitBox box(5, 32, block);
     SolveOptions opt;
     opt.settings.max_bounces = 8;
     opt.link_tolerance = link_tolerance;
+    opt.link_probes = link_probes;
     Solver solver(box.scene, box.charts, box.vis, opt);
     solver.Run();
     BoxRun r;
@@ -186,6 +188,34 @@ TEST(LinkRefine, LitBoxWithinToleranceWithFewerLinkRays) {
     EXPECT_LT(worst, 0.005);
     EXPECT_LT(mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) * 4 / 5);  // measured: 0.59
+}
+
+// Link probes (Solver::Gatherer::TraceLink): with a table in the box, links are wholly
+// visible, wholly hidden or partial; probing a subset of every link's pairs first (half of
+// them for links of fewer than 16) keeps the answer of one ray per pair with fewer rays.
+TEST(LinkRefine, ProbesKeepTheAnswerOfEveryPairWithFewerRays) {
+    const double tol = SolveOptions{}.link_tolerance;
+    const BoxRun ref = SolveBox(tol, true, 0), got = SolveBox(tol, true);
+    ASSERT_EQ(ref.e.size(), got.e.size());
+    double top = 0, worst = 0, sum = 0;
+    for (double v : ref.e)
+        top = std::max(top, v);
+    ASSERT_GT(top, 0);
+    size_t dark = 0;
+    for (size_t k = 0; k < ref.e.size(); ++k) {
+        const double d = std::abs(got.e[k] - ref.e[k]) / top;
+        worst = std::max(worst, d);
+        sum += d;
+        dark += ref.e[k] < 0.2 * top ? 1 : 0;
+    }
+    const double mean = sum / double(ref.e.size());
+    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f, dark %zu\n",
+                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
+                worst, mean, dark);
+    EXPECT_GT(dark, 0u);  // the table's shadow
+    EXPECT_LT(worst, 0.01);
+    EXPECT_LT(mean, 0.001);
+    EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) * 2 / 5);  // measured: 0.29
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {

@@ -73,13 +73,15 @@ inline Patch MakePatch(const Surface& f, int res, uint32_t material, double scal
 
 // An open box seen from inside (the first `faces` of: floor, back wall, left wall, right
 // wall, ceiling of the unit cube; 1..5) lit by a small square light below its ceiling,
-// charts `res` texels wide: several bounces of coloured interreflection.
+// charts `res` texels wide: several bounces of coloured interreflection. With `block`, a
+// sixth chart, a square table top over the floor's middle, casts shadows and hides parts
+// of the floor from the ceiling and walls (partly visible links).
 struct LitBox {
     Scene scene;
     std::vector<SolveChart> charts;
     VisibilityScene vis;
 
-    LitBox(int faces, int res) {
+    LitBox(int faces, int res, bool block = false) {
         Material m;
         m.albedo = Vec3f(0.7f, 0.6f, 0.5f);
         m.use_vertex_colors = false;
@@ -99,6 +101,13 @@ struct LitBox {
             Patch p = MakePatch(all[k], res, 0, 1);
             charts.push_back(std::move(p.chart));
             vis.AddTriangles(p.xyz, p.tris, "box");
+        }
+        if (block) {
+            Patch p = MakePatch(
+                [](double u, double v) { return Vec3d(0.3 + 0.4 * u, 0.35, 0.7 - 0.4 * v); }, res,
+                0, 1);  // normal +y
+            charts.push_back(std::move(p.chart));
+            vis.AddTriangles(p.xyz, p.tris, "table");
         }
         vis.Commit();
     }
