@@ -180,10 +180,11 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         // max_resolution, so it keeps every light-map texel it asks for).
         const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
         mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
-        // The turn bound stays on 8 x 8 cells per union (texel_size 0), coarser than the
-        // solver's horizon cells on a large chart: with cells of the horizon's 8 texels lucy
-        // merged to 86 charts but its error against the path tracer rose from 4.6 % to 7.1 %
-        // (bench/RESULTS.md, "Issue 13 (session 8)"), for a reason not found yet.
+        // The turn bound stays on 8 x 8 cells per union (texel_size 0): with cells of 8
+        // texels lucy merged to 86 charts but its error against the path tracer rose from
+        // 4.65 % to 6.33 %, its 512-texel charts' indirect light 18-24 % low from the
+        // solver's 32 x 32 emitter samples per chart (bench/RESULTS.md, "Issue 13 (session
+        // 9)"; docs/method.md, "Merging").
         if (opt.merge_horizon_cells) {
             mopt.texel_size = opt.texel_size;
             mopt.min_resolution = opt.min_resolution;
