@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "core/paged_file.h"
 #include "output/seam_graph.h"
 
@@ -86,6 +87,7 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     DiskArray<Sample> samples(PagedFile::Temporary{{}, "seam samples"}, kSpillCache);
     DiskArray<EdgeKey> compared(PagedFile::Temporary{{}, "seam edges"}, kSpillCache);
     double level = 0;
+    size_t most_waiting = 0;
     JumpStats display;
     SeamStats st;
     ForEachTile(
@@ -112,7 +114,9 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
                             });
             }
             pairing.Done(c);
+            most_waiting = std::max(most_waiting, pairing.waiting());
         });
+    spdlog::debug("seams: at most {} border sides waiting for their other side", most_waiting);
     st.seam_edges = compared.size();
     st.open_edges = pairing.open();
     st.samples = samples.size();
