@@ -25,7 +25,7 @@ uint64_t MemoryBudget::GeometryPyramids() const {
 }
 
 uint64_t MemoryBudget::CoefficientPools() const {
-    return total_ / 16;
+    return std::min<uint64_t>(total_ / 16, 64 * kMiB);
 }
 
 uint64_t MemoryBudget::EmbreeLimit() const {
@@ -47,7 +47,7 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"solve.visibility", Visibility(), "64 MiB whatever the budget (Embree scene, sized at ingest)"},
             {"solve.embree_limit", EmbreeLimit(), "min(2x visibility, 1/2) (hard cap)"},
             {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"},
-            {"solve.coefficient_pools", CoefficientPools(), "1/16 beyond pinned charts"},
+            {"solve.coefficient_pools", CoefficientPools(), "min(1/16, 64 MiB) beyond pinned charts"},
             {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"},
             {"export.stitch_cache", StitchCache(), "min(1/16, 16 MiB)"}};
 }

@@ -42,7 +42,10 @@ public:
     // Solve: the geometry pyramids resident beyond the charts pinned by the threads.
     uint64_t GeometryPyramids() const;
     // Solve: the coefficient pools (quadtree nodes, value and unshot per chart) resident
-    // beyond the fields pinned by the threads and the emitters being built.
+    // beyond the fields pinned by the threads and the emitters being built. At most the
+    // default 1G's 64 MiB: an evicted field's pages stay in the kernel's page cache and
+    // fault back in without I/O, so more buys no measurable time (bench/RESULTS.md, "Issue
+    // 16 (session 9)") while the solve's peak would grow with the charts up to 1/16.
     uint64_t CoefficientPools() const;
     // Solve: a hard cap on Embree's own allocations (its memory monitor): twice the
     // visibility share (the share sizes the scene; the cap allows for Embree's build

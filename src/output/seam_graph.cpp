@@ -214,10 +214,7 @@ struct SeamStitcher::Parts {
     std::vector<std::pair<uint32_t, Vec3f>> normals;
 };
 
-SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes, const std::string& temp_dir)
-    : cache_bytes_(cache_bytes),
-      fd_(OpenTemporaryFile(temp_dir, "stitch data")),
-      stored_(view.chart_count(), {0, 0}) {
+ChartNeighbours FindChartNeighbours(const BakeView& view) {
     // Charts that share a vertex have touching boxes (each box holds its chart's vertices;
     // the margin only adds candidates, which find no common key).
     const auto& ch = view.manifest.charts;
@@ -229,13 +226,32 @@ SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes, const std::
                 return false;
         return true;
     };
-    neighbour_start_.assign(1, 0);
+    ChartNeighbours n;
+    n.start.assign(1, 0);
     for (size_t a = 0; a < ch.size(); ++a) {
         for (size_t b = 0; b < ch.size(); ++b)
             if (b != a && touch(a, b))
-                neighbours_.push_back(uint32_t(b));
-        neighbour_start_.push_back(uint32_t(neighbours_.size()));
+                n.list.push_back(uint32_t(b));
+        n.start.push_back(uint32_t(n.list.size()));
     }
+    return n;
+}
+
+std::vector<uint32_t> LastNeighbours(const BakeView& view) {
+    const ChartNeighbours n = FindChartNeighbours(view);
+    std::vector<uint32_t> last(view.chart_count());
+    for (uint32_t a = 0; a < last.size(); ++a)
+        last[a] = n.start[a] == n.start[a + 1] ? a : std::max(a, n.list[n.start[a + 1] - 1]);
+    return last;
+}
+
+SeamStitcher::SeamStitcher(const BakeView& view, size_t cache_bytes, const std::string& temp_dir)
+    : cache_bytes_(cache_bytes),
+      fd_(OpenTemporaryFile(temp_dir, "stitch data")),
+      stored_(view.chart_count(), {0, 0}) {
+    ChartNeighbours n = FindChartNeighbours(view);
+    neighbour_start_ = std::move(n.start);
+    neighbours_ = std::move(n.list);
 }
 
 SeamStitcher::~SeamStitcher() {

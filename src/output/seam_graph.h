@@ -73,6 +73,79 @@ constexpr float kFoldCos = 0.7071f;
 bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
             const Vec3f& y1);
 
+// Every chart's neighbours, ascending (CSR: chart a's are list[start[a]..start[a + 1])): the
+// charts whose boxes touch its box, so every chart sharing a vertex with it, and maybe a few
+// more (O(charts^2) box tests).
+struct ChartNeighbours {
+    std::vector<uint32_t> start, list;
+};
+ChartNeighbours FindChartNeighbours(const BakeView& view);
+
+// Per chart, the last chart in chart order that can share a border edge with it (itself if
+// none comes later).
+std::vector<uint32_t> LastNeighbours(const BakeView& view);
+
+// Pairs the sides of chart-border edges as a pass over every tile in chart order meets them
+// (the seam metric's and the light map's texel stitch): a key's first side waits; a side of
+// the same key from a later chart completes the pair (on_pair(waiting, this), then neither
+// waits); a second side from the waiting side's own chart is ignored (a split vertex), a
+// third chart's side waits again. A chart's sides still waiting once its last neighbour
+// (LastNeighbours) is done can never pair and are dropped as open edges, so memory follows
+// the charts in progress, not the whole border: the pairs and their order are the pass's.
+template <typename Side>
+class BorderPairing {
+public:
+    explicit BorderPairing(const BakeView& view) : BorderPairing(LastNeighbours(view)) {}
+    explicit BorderPairing(const std::vector<uint32_t>& last)
+        : keys_(last.size()), retire_at_(last.size()) {
+        for (uint32_t a = 0; a < last.size(); ++a)
+            retire_at_[last[a]].push_back(a);
+    }
+
+    template <typename OnPair>
+    void Add(uint32_t c, const IdPair& key, const Side& side, OnPair&& on_pair) {
+        const auto it = waiting_.find(key);
+        if (it == waiting_.end()) {
+            waiting_.emplace(key, Waiting{c, side});
+            keys_[c].push_back(key);
+            return;
+        }
+        if (it->second.chart == c)
+            return;
+        on_pair(it->second.side, side);
+        waiting_.erase(it);
+    }
+
+    // Chart c's sides are all added: drops the waiting sides of the charts whose last
+    // neighbour is c.
+    void Done(uint32_t c) {
+        for (const uint32_t a : retire_at_[c]) {
+            for (const IdPair& key : keys_[a]) {
+                const auto it = waiting_.find(key);
+                if (it != waiting_.end() && it->second.chart == a) {
+                    waiting_.erase(it);
+                    ++dropped_;
+                }
+            }
+            std::vector<IdPair>().swap(keys_[a]);
+        }
+    }
+
+    // Sides that never paired (so far).
+    uint64_t open() const { return dropped_ + waiting_.size(); }
+    size_t waiting() const { return waiting_.size(); }
+
+private:
+    struct Waiting {
+        uint32_t chart;
+        Side side;
+    };
+    std::unordered_map<IdPair, Waiting, IdPairHash> waiting_;
+    std::vector<std::vector<IdPair>> keys_;         // per chart: the keys it left waiting
+    std::vector<std::vector<uint32_t>> retire_at_;  // per chart c: the charts whose last is c
+    uint64_t dropped_ = 0;
+};
+
 struct SeamGraphStats {
     uint64_t stitched_edges = 0;  // border edges with targets
     uint64_t fold_edges = 0;      // creases: each side keeps its own field

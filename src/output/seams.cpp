@@ -2,18 +2,21 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/log.h"
+#include "core/paged_file.h"
 #include "output/seam_graph.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <unordered_map>
+#include <cstring>
 
 namespace mebake::output {
 
 namespace {
 
 constexpr int kMaxSamples = 16;
+constexpr size_t kSpillCache = size_t(1) << 20;  // per temporary file
 
 float Luminance(const Vec3f& b) {
     return 0.2126f * b.x + 0.7152f * b.y + 0.0722f * b.z;
@@ -27,9 +30,17 @@ struct EdgeSamples {
 };
 
 struct Waiting {
-    uint32_t chart;
     std::array<float, kMaxSamples> y;
     Vec3f normal, n0, n1;
+};
+
+// A compared sample: the jump, the level and the edge (index of its key).
+struct Sample {
+    float diff, level;
+    uint32_t edge;
+};
+struct EdgeKey {
+    uint64_t g0, g1;
 };
 
 // The outline edges of a tile (seam_graph.h) with B sampled along them.
@@ -69,13 +80,14 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
     if (opt.samples < 1 || opt.samples > kMaxSamples)
         UsageError("seam samples {}: expected 1 to {}", opt.samples, kMaxSamples);
     const size_t ns = size_t(opt.samples);
-    std::unordered_map<IdPair, Waiting, IdPairHash> waiting;
-    struct Sample {
-        float diff, level;
-        uint32_t edge;
-    };
-    std::vector<Sample> samples;
-    std::vector<std::pair<uint64_t, uint64_t>> compared;
+    // The samples and the compared edges go to temporary files (read back three times
+    // below), the waiting sides are dropped once no later chart can pair them: memory does
+    // not grow with the border length.
+    BorderPairing<Waiting> pairing(view);
+    DiskArray<Sample> samples(PagedFile::Temporary{{}, "seam samples"}, kSpillCache);
+    DiskArray<EdgeKey> compared(PagedFile::Temporary{{}, "seam edges"}, kSpillCache);
+    double level = 0;
+    size_t most_waiting = 0;
     JumpStats display;
     SeamStats st;
     ForEachTile(
@@ -85,57 +97,54 @@ SeamStats MeasureSeams(const BakeView& view, const SeamOptions& opt) {
         },
         [&](uint32_t c, stream::ChartTile&, std::vector<EdgeSamples>& edges) {
             for (const EdgeSamples& e : edges) {
-                const auto key = std::make_pair(e.g0, e.g1);
-                auto it = waiting.find(key);
-                if (it == waiting.end()) {
-                    waiting.emplace(key, Waiting{c, e.y, e.normal, e.n0, e.n1});
-                    continue;
-                }
-                if (it->second.chart == c)
-                    continue;  // a split vertex inside one chart
-                const Waiting& w = it->second;
-                if (Crease(w.normal, e.normal, w.n0, e.n0, w.n1, e.n1)) {
-                    ++st.fold_edges;  // B jumps here on the surface itself (not stitched either)
-                    waiting.erase(it);
-                    continue;
-                }
-                const uint32_t edge = uint32_t(compared.size());
-                compared.push_back(key);
-                for (size_t k = 0; k < ns; ++k) {
-                    const float y1 = it->second.y[k], y2 = e.y[k];
-                    samples.push_back({std::abs(y1 - y2), 0.5f * (y1 + y2), edge});
-                    display.Add(y1, y2);
-                }
-                waiting.erase(it);
+                pairing.Add(c, {e.g0, e.g1}, Waiting{e.y, e.normal, e.n0, e.n1},
+                            [&](const Waiting& w, const Waiting& s) {
+                                if (Crease(w.normal, s.normal, w.n0, s.n0, w.n1, s.n1)) {
+                                    ++st.fold_edges;  // B jumps here on the surface itself
+                                    return;           // (not stitched either)
+                                }
+                                const uint32_t edge = uint32_t(compared.size());
+                                compared.Push({e.g0, e.g1});
+                                for (size_t k = 0; k < ns; ++k) {
+                                    const float y1 = w.y[k], y2 = s.y[k];
+                                    samples.Push({std::abs(y1 - y2), 0.5f * (y1 + y2), edge});
+                                    level += 0.5f * (y1 + y2);
+                                    display.Add(y1, y2);
+                                }
+                            });
             }
+            pairing.Done(c);
+            most_waiting = std::max(most_waiting, pairing.waiting());
         });
+    spdlog::debug("seams: at most {} border sides waiting for their other side", most_waiting);
     st.seam_edges = compared.size();
-    st.open_edges = waiting.size();
+    st.open_edges = pairing.open();
     st.samples = samples.size();
     st.display = display.Summary();
-    if (samples.empty())
+    if (st.samples == 0)
         return st;
-    double level = 0;
-    for (const Sample& s : samples)
-        level += s.level;
-    st.mean_level = level / double(samples.size());
+    st.mean_level = level / double(st.samples);
     const double floor = std::max(1e-3 * st.mean_level, 1e-30);
-    std::vector<double> rel(samples.size());
-    double sum = 0;
-    for (size_t i = 0; i < samples.size(); ++i) {
-        rel[i] = samples[i].diff / std::max(double(samples[i].level), floor);
-        sum += rel[i];
-        if (rel[i] > st.max_relative) {
-            st.max_relative = rel[i];
-            st.worst_v0 = compared[samples[i].edge].first;
-            st.worst_v1 = compared[samples[i].edge].second;
+    auto for_each_relative = [&](auto&& f) {
+        for (uint64_t i = 0; i < st.samples; ++i) {
+            const Sample s = samples.Get(i);
+            f(s.diff / std::max(double(s.level), floor), s);
         }
-    }
-    st.mean_relative = sum / double(samples.size());
-    const size_t q =
-        std::min(samples.size() - 1, size_t(std::ceil(0.95 * double(samples.size()))) - 1);
-    std::nth_element(rel.begin(), rel.begin() + ptrdiff_t(q), rel.end());
-    st.p95_relative = rel[q];
+    };
+    double sum = 0;
+    for_each_relative([&](double rel, const Sample& s) {
+        sum += rel;
+        if (rel > st.max_relative) {
+            st.max_relative = rel;
+            const EdgeKey worst = compared.Get(s.edge);
+            st.worst_v0 = worst.g0;
+            st.worst_v1 = worst.g1;
+        }
+    });
+    st.mean_relative = sum / double(st.samples);
+    const uint64_t q = std::min(st.samples - 1, uint64_t(std::ceil(0.95 * double(st.samples))) - 1);
+    st.p95_relative = NthSmallest(
+        q, [&](auto&& f) { for_each_relative([&](double rel, const Sample&) { f(rel); }); });
     return st;
 }
 

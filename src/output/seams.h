@@ -15,13 +15,18 @@
 // An edge in more than two charts (non-manifold input) compares the first two; a third
 // copy counts as open. Edges with a vertex repair added (no input id) are skipped.
 //
-// Memory: the outline edges still waiting for their other side, and 8 bytes per sample.
+// Memory: the outline edges of the charts in progress still waiting for their other side
+// (seam_graph.h, BorderPairing); the samples go to a temporary file (12 bytes each) and
+// are read back for the means and the exact 95th percentile (a radix selection).
 #pragma once
 
 #include "output/bake_view.h"
 #include "output/jump_stats.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <cstring>
+#include <vector>
 
 namespace mebake::output {
 
@@ -43,5 +48,32 @@ struct SeamStats {
 };
 
 SeamStats MeasureSeams(const BakeView& view, const SeamOptions& options = {});
+
+// The q-th smallest (from 0) of n > q values >= 0 that for_each(f) passes to f, each pass
+// the same values, as std::nth_element finds it, with no copy of them: a radix selection
+// on their bits (ordered as the values are, for non-negative doubles), 16 bits per pass,
+// four passes. Used for the 95th percentile of the samples spilled to disk.
+template <typename ForEach>
+double NthSmallest(uint64_t q, ForEach&& for_each) {
+    uint64_t prefix = 0;
+    std::vector<uint64_t> count(size_t(1) << 16);
+    for (int shift = 48; shift >= 0; shift -= 16) {
+        std::fill(count.begin(), count.end(), 0);
+        const uint64_t high = shift == 48 ? 0 : ~uint64_t(0) << (shift + 16);
+        for_each([&](double v) {
+            uint64_t bits;
+            std::memcpy(&bits, &v, sizeof bits);
+            if ((bits & high) == prefix)
+                ++count[size_t((bits >> shift) & 0xFFFF)];
+        });
+        size_t b = 0;
+        while (q >= count[b])
+            q -= count[b++];
+        prefix |= uint64_t(b) << shift;
+    }
+    double v;
+    std::memcpy(&v, &prefix, sizeof v);
+    return v;
+}
 
 }  // namespace mebake::output

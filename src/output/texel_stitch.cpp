@@ -16,23 +16,21 @@ constexpr uint32_t kMaxSamplesPerEdge = 256;
 constexpr int kMaxIterations = 500;
 constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
 
-using Key = IdPair;
-using KeyHash = IdPairHash;
 
 Vec2d D(Vec2f v) {
     return {double(v.x), double(v.y)};
 }
 
-uint64_t TexelKey(uint32_t chart, uint32_t texel) {
-    return (uint64_t(chart) << 32) | texel;
-}
-
 // The 2 x 2 texels a bilinear filter reads at chart point p (clamped as the gutter does),
-// with their weights.
+// and where p lies between them (the weights, BilinearWeights).
 struct Footprint {
     std::array<uint32_t, 4> texel;
-    std::array<double, 4> weight;
+    double ax, ay;
 };
+
+std::array<double, 4> BilinearWeights(double ax, double ay) {
+    return {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+}
 
 Footprint Bilinear(Vec2d p, uint32_t res) {
     const double x = p.x * res - 0.5, y = p.y * res - 0.5;
@@ -43,7 +41,7 @@ Footprint Bilinear(Vec2d p, uint32_t res) {
     };
     const uint32_t i0 = clamp(fx), i1 = clamp(fx + 1), j0 = clamp(fy), j1 = clamp(fy + 1);
     return {{j0 * res + i0, j0 * res + i1, j1 * res + i0, j1 * res + i1},
-            {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay}};
+            ax, ay};
 }
 
 struct EdgeSide {
@@ -55,7 +53,7 @@ struct EdgeSide {
 
 // A chart's outline edges and the texels their bilinear footprints read, as shaded.
 struct ChartPart {
-    std::vector<Key> keys;
+    std::vector<IdPair> keys;
     std::vector<EdgeSide> sides;
     std::vector<uint32_t> texels;  // sorted
     std::vector<float> values;     // channels per texel
@@ -97,40 +95,51 @@ ChartPart PrepareChart(const BakeView& view, const Atlas& atlas, uint32_t c,
     return part;
 }
 
-// Rows of A: 8 (unknown, weight) entries per seam sample, B's weights negated.
+// Rows of A: 8 (unknown, weight) entries per seam sample, side y's weights negated; the
+// weights are kept as the two footprints' (ax, ay) (32 bytes a row, not 64) and made again
+// when used, the same doubles.
 struct SeamRows {
-    std::vector<uint32_t> index;
-    std::vector<double> weight;
+    std::vector<uint32_t> index;  // 8 per row
+    std::vector<double> frac;     // 4 per row: x's ax, ay, y's ax, ay
     size_t rows() const { return index.size() / 8; }
+    void Add(const std::array<uint32_t, 8>& idx, const Footprint& fx, const Footprint& fy) {
+        index.insert(index.end(), idx.begin(), idx.end());
+        frac.insert(frac.end(), {fx.ax, fx.ay, fy.ax, fy.ay});
+    }
+    std::array<double, 8> Weights(size_t r) const {
+        const std::array<double, 4> wx = BilinearWeights(frac[4 * r], frac[4 * r + 1]);
+        const std::array<double, 4> wy = BilinearWeights(frac[4 * r + 2], frac[4 * r + 3]);
+        return {wx[0], wx[1], wx[2], wx[3], -wy[0], -wy[1], -wy[2], -wy[3]};
+    }
 };
 
 // y = (I + lambda A^T A) x.
 void ApplyNormal(const SeamRows& a, const std::vector<double>& x, std::vector<double>& y) {
     y = x;
     for (size_t r = 0; r < a.rows(); ++r) {
+        const std::array<double, 8> w = a.Weights(r);
+        const uint32_t* idx = &a.index[8 * r];
         double ax = 0;
-        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
-            ax += a.weight[k] * x[a.index[k]];
-        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
-            y[a.index[k]] += kSeamWeight * a.weight[k] * ax;
+        for (size_t k = 0; k < 8; ++k)
+            ax += w[k] * x[idx[k]];
+        for (size_t k = 0; k < 8; ++k)
+            y[idx[k]] += kSeamWeight * w[k] * ax;
     }
 }
 
-// Preconditioned conjugate gradients for (I + lambda A^T A) x = b from x = b; returns the
-// iterations.
-int SolveChannel(const SeamRows& a, const std::vector<double>& diag, const std::vector<double>& b,
-                 std::vector<double>& x) {
-    const size_t n = b.size();
-    x = b;
-    std::vector<double> r(n), z(n), p(n), q(n);
+// Preconditioned conjugate gradients for (I + lambda A^T A) x = b from x = b, in place (x
+// holds b on entry); returns the iterations. The preconditioned residual z = r / diag is
+// made where it is used, not stored.
+int SolveChannel(const SeamRows& a, const std::vector<double>& diag, std::vector<double>& x) {
+    const size_t n = x.size();
+    std::vector<double> r(n), p(n), q(n);
     ApplyNormal(a, x, q);
     double bnorm = 0, rz = 0;
     for (size_t i = 0; i < n; ++i) {
-        r[i] = b[i] - q[i];
-        z[i] = r[i] / diag[i];
-        p[i] = z[i];
-        rz += r[i] * z[i];
-        bnorm += b[i] * b[i];
+        r[i] = x[i] - q[i];
+        p[i] = r[i] / diag[i];
+        rz += r[i] * p[i];
+        bnorm += x[i] * x[i];
     }
     const double stop = kTolerance * kTolerance * std::max(bnorm, 1e-300);
     int it = 0;
@@ -151,13 +160,12 @@ int SolveChannel(const SeamRows& a, const std::vector<double>& diag, const std::
         for (size_t i = 0; i < n; ++i) {
             x[i] += alpha * p[i];
             r[i] -= alpha * q[i];
-            z[i] = r[i] / diag[i];
-            rz_next += r[i] * z[i];
+            rz_next += r[i] * (r[i] / diag[i]);
         }
         const double beta = rz_next / rz;
         rz = rz_next;
         for (size_t i = 0; i < n; ++i)
-            p[i] = z[i] + beta * p[i];
+            p[i] = r[i] / diag[i] + beta * p[i];
     }
     return it;
 }
@@ -165,9 +173,10 @@ int SolveChannel(const SeamRows& a, const std::vector<double>& diag, const std::
 double MismatchSquares(const SeamRows& a, const std::vector<double>& x) {
     double sum = 0;
     for (size_t r = 0; r < a.rows(); ++r) {
+        const std::array<double, 8> w = a.Weights(r);
         double ax = 0;
-        for (size_t k = 8 * r; k < 8 * r + 8; ++k)
-            ax += a.weight[k] * x[a.index[k]];
+        for (size_t k = 0; k < 8; ++k)
+            ax += w[k] * x[a.index[8 * r + k]];
         sum += ax * ax;
     }
     return sum;
@@ -175,11 +184,19 @@ double MismatchSquares(const SeamRows& a, const std::vector<double>& x) {
 
 }  // namespace
 
+int64_t TexelStitch::Slot(uint32_t chart, uint32_t texel) const {
+    if (size_t(chart) + 1 >= first_.size())
+        return -1;
+    const auto begin = texel_.begin() + first_[chart], end = texel_.begin() + first_[chart + 1];
+    const auto it = std::lower_bound(begin, end, texel);
+    return it == end || *it != texel ? -1 : it - texel_.begin();
+}
+
 const float* TexelStitch::Find(uint32_t chart, uint32_t i, uint32_t j) const {
-    if (index_.empty() || chart >= resolution_.size())
+    if (chart >= resolution_.size())
         return nullptr;
-    const auto it = index_.find(TexelKey(chart, j * resolution_[chart] + i));
-    return it == index_.end() ? nullptr : &values_[size_t(it->second) * size_t(channels_)];
+    const int64_t slot = Slot(chart, j * resolution_[chart] + i);
+    return slot < 0 ? nullptr : &values_[size_t(slot) * size_t(channels_)];
 }
 
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
@@ -191,8 +208,9 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     const size_t solved = content == MapContent::Radiosity ? 3 : nc;
     for (const AtlasChart& ac : atlas.charts)
         st.resolution_.push_back(ac.resolution);
-    std::unordered_map<Key, EdgeSide, KeyHash> waiting;
+    BorderPairing<EdgeSide> pairing(view);
     SeamRows rows;
+    st.first_.assign(1, 0);
     auto add_pair = [&](const EdgeSide& x, const EdgeSide& y) {
         const uint32_t rx = st.resolution_[x.chart], ry = st.resolution_[y.chart];
         const double len = std::max(Length(D(x.b) - D(x.a)) * rx, Length(D(y.b) - D(y.a)) * ry);
@@ -205,17 +223,14 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
             std::array<uint32_t, 8> idx;
             bool found = true;
             for (int m = 0; m < 8 && found; ++m) {
-                const auto it = st.index_.find(m < 4 ? TexelKey(x.chart, fx.texel[size_t(m)])
-                                                     : TexelKey(y.chart, fy.texel[size_t(m - 4)]));
-                found = it != st.index_.end();
+                const int64_t slot = m < 4 ? st.Slot(x.chart, fx.texel[size_t(m)])
+                                           : st.Slot(y.chart, fy.texel[size_t(m - 4)]);
+                found = slot >= 0;
                 if (found)
-                    idx[size_t(m)] = it->second;
+                    idx[size_t(m)] = uint32_t(slot);
             }
-            if (!found)
-                continue;
-            rows.index.insert(rows.index.end(), idx.begin(), idx.end());
-            for (int m = 0; m < 8; ++m)
-                rows.weight.push_back(m < 4 ? fx.weight[size_t(m)] : -fy.weight[size_t(m - 4)]);
+            if (found)
+                rows.Add(idx, fx, fy);
         }
     };
     ForEachTile(
@@ -224,39 +239,35 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
             return PrepareChart(view, atlas, c, tile, content);
         },
         [&](uint32_t c, stream::ChartTile&, ChartPart& part) {
-            const size_t first = st.values_.size() / nc;
-            for (size_t k = 0; k < part.texels.size(); ++k)
-                st.index_.emplace(TexelKey(c, part.texels[k]), uint32_t(first + k));
+            CHECK_EQ(st.first_.size(), size_t(c) + 1);
+            st.texel_.insert(st.texel_.end(), part.texels.begin(), part.texels.end());
+            st.first_.push_back(uint32_t(st.texel_.size()));
             st.values_.insert(st.values_.end(), part.values.begin(), part.values.end());
-            for (size_t i = 0; i < part.sides.size(); ++i) {
-                auto it = waiting.find(part.keys[i]);
-                if (it == waiting.end()) {
-                    waiting.emplace(part.keys[i], part.sides[i]);
-                    continue;
-                }
-                if (it->second.chart == c)
-                    continue;  // a split vertex inside one chart
-                const EdgeSide &x = it->second, &y = part.sides[i];
-                if (!Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1))
-                    add_pair(it->second, part.sides[i]);
-                waiting.erase(it);
-            }
+            for (size_t i = 0; i < part.sides.size(); ++i)
+                pairing.Add(c, part.keys[i], part.sides[i],
+                            [&](const EdgeSide& x, const EdgeSide& y) {
+                                if (!Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1))
+                                    add_pair(x, y);
+                            });
+            pairing.Done(c);
         });
-    waiting.clear();
     const size_t n = st.values_.size() / nc;
     std::vector<double> diag(n, 1.0);
-    for (size_t k = 0; k < rows.index.size(); ++k)
-        diag[rows.index[k]] += kSeamWeight * rows.weight[k] * rows.weight[k];
+    for (size_t r = 0; r < rows.rows(); ++r) {
+        const std::array<double, 8> w = rows.Weights(r);
+        for (size_t k = 0; k < 8; ++k)
+            diag[rows.index[8 * r + k]] += kSeamWeight * w[k] * w[k];
+    }
     TexelStitchStats s;
     s.texels = n;
     s.samples = rows.rows();
     double before = 0, after = 0;
-    std::vector<double> b(n), x;
+    std::vector<double> x(n);
     for (size_t ch = 0; ch < solved && !rows.index.empty(); ++ch) {
         for (size_t i = 0; i < n; ++i)
-            b[i] = st.values_[i * nc + ch];
-        before += MismatchSquares(rows, b);
-        s.iterations = std::max(s.iterations, SolveChannel(rows, diag, b, x));
+            x[i] = st.values_[i * nc + ch];
+        before += MismatchSquares(rows, x);
+        s.iterations = std::max(s.iterations, SolveChannel(rows, diag, x));
         after += MismatchSquares(rows, x);
         for (size_t i = 0; i < n; ++i)  // B >= 0; E is signed
             st.values_[i * nc + ch] =

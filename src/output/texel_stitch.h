@@ -15,7 +15,11 @@
 // edge (p_A, p_B the same surface point in both charts). The normal equations
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
-// memory grows with the seams' texels and samples, not with the map. Single-threaded and
+// memory grows with the seams' texels and samples, not with the map (per texel 4 bytes of
+// index, its channels as floats and 5 doubles of CG; per sample 64 bytes; the sides
+// waiting for their pair only while a neighbouring chart can still come, seam_graph.h's
+// BorderPairing). The global CG is kept (one system, not one per seam component) so the
+// texels are the same bytes as before. Single-threaded and
 // in chart order: the same texels for any thread count. Folds (faces more than 45 degrees
 // apart) and mesh borders are left alone, as seam_graph.h does.
 #pragma once
@@ -25,7 +29,6 @@
 #include "output/lightmap.h"
 
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 namespace mebake::output {
@@ -42,14 +45,17 @@ class TexelStitch {
 public:
     // The stitched texel (i, j) of chart c's square (MapChannels floats), or nullptr.
     const float* Find(uint32_t chart, uint32_t i, uint32_t j) const;
-    size_t size() const { return index_.size(); }
+    size_t size() const { return texel_.size(); }
 
 private:
     friend TexelStitch StitchTexels(const BakeView&, const Atlas&, MapContent, TexelStitchStats*);
+    // The slot of texel j * res + i of a chart, or -1.
+    int64_t Slot(uint32_t chart, uint32_t texel) const;
     int channels_ = 0;
-    std::unordered_map<uint64_t, uint32_t> index_;  // (chart << 32 | j * res + i) -> slot
-    std::vector<uint32_t> resolution_;              // per chart
-    std::vector<float> values_;                     // channels_ per slot
+    std::vector<uint32_t> resolution_;  // per chart
+    std::vector<uint32_t> first_;       // per chart and one more: its first slot
+    std::vector<uint32_t> texel_;       // per slot: j * res + i, ascending within a chart
+    std::vector<float> values_;         // channels_ per slot
 };
 
 // The weight lambda of the seam samples against keeping a texel as shaded.

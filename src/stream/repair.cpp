@@ -467,7 +467,10 @@ RepairReport Repair(TriMesh& mesh, const std::vector<uint8_t>& vertex_on_cut,
         MakeManifold(tris, vsrc, report);
         Compact(tris, vsrc);
         om.clean();
-        om.reserve(vsrc.size(), tris.size() * 3 / 2 + 16, tris.size() + 16);
+        // Edges: 3F/2 plus half the border edges, and a brick's border is long, so 3F/2
+        // would make the edge arrays grow by doubling (old and new copy at once, the brick
+        // pass's peak); 3F bounds them, and reserved pages never written cost no memory.
+        om.reserve(vsrc.size(), tris.size() * 3 + 16, tris.size() + 16);
         for (uint32_t s : vsrc) {
             const Vec3f& p = mesh.position[s];
             om.add_vertex(OmMesh::Point(p.x, p.y, p.z));

@@ -9,7 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <random>
+#include <vector>
 
 namespace mebake::output {
 namespace {
@@ -109,6 +113,43 @@ TEST_F(SeamTest, ABrighterLeafIsShownContinuously) {
     EXPECT_NEAR(b_at(0.5 + 1.5 * d), 1.0, 1e-5);
     EXPECT_NEAR(b_at(0.5 - 0.5 * d), 1.75, 1e-5);
     EXPECT_NEAR(b_at(0.5 + 0.5 * d), 1.25, 1e-5);
+}
+
+// The 95th percentile's selection on spilled samples: the value std::nth_element puts at q,
+// for values with repeats, zeros, tiny and huge magnitudes, at every rank of a small set
+// and at chosen ranks of a large one.
+TEST(NthSmallestTest, SameValueAsNthElement) {
+    std::mt19937_64 rng(7);
+    std::vector<double> v;
+    for (int i = 0; i < 20000; ++i) {
+        const double u = std::uniform_real_distribution<double>(0, 1)(rng);
+        const int kind = int(rng() % 4);
+        if (kind == 0)
+            v.push_back(0.0);
+        else if (kind == 1)
+            v.push_back(std::ldexp(u, int(rng() % 200) - 100));
+        else if (kind == 2)
+            v.push_back(double(int(u * 5)));  // repeats
+        else
+            v.push_back(u);
+    }
+    auto over = [](const std::vector<double>& vals) {
+        return [&vals](auto&& f) {
+            for (double x : vals)
+                f(x);
+        };
+    };
+    auto expect = [&](const std::vector<double>& vals, uint64_t q) {
+        std::vector<double> sorted = vals;
+        std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(q), sorted.end());
+        EXPECT_EQ(NthSmallest(q, over(vals)), sorted[q]) << "rank " << q;
+    };
+    const std::vector<double> small(v.begin(), v.begin() + 40);
+    for (uint64_t q = 0; q < small.size(); ++q)
+        expect(small, q);
+    for (uint64_t q : {uint64_t(0), uint64_t(1), uint64_t(4999), uint64_t(10000),
+                       uint64_t(18999), uint64_t(19999)})
+        expect(v, q);
 }
 
 }  // namespace

@@ -20,6 +20,9 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace mebake::output {
 namespace {
@@ -559,6 +562,38 @@ TEST_F(StitchTest, SameDataWhateverTheCacheAndTheOrder) {
     }
     const Atlas atlas = PackAtlas(ChartResolutions(none));
     EXPECT_EQ(Page(none, atlas), Page(all, atlas));
+}
+
+// The pairing of border sides in chart order (seam_graph.h): first side waits, a later
+// chart's side pairs with it, a second side from the same chart is ignored, a third chart's
+// side waits again, and a chart's unpaired sides are dropped as open once its last
+// neighbour is done (so a later non-neighbour's side of the same key waits on its own).
+TEST(BorderPairingTest, PairsInChartOrderAndDropsSidesNoLaterChartCanMeet) {
+    BorderPairing<std::string> pairing(std::vector<uint32_t>{1, 3, 3, 3});
+    std::vector<std::pair<std::string, std::string>> pairs;
+    auto add = [&](uint32_t c, uint64_t key, const std::string& side) {
+        pairing.Add(c, {key, key + 1}, side, [&](const std::string& w, const std::string& s) {
+            pairs.emplace_back(w, s);
+        });
+    };
+    add(0, 10, "0a");
+    add(0, 20, "0b");
+    add(0, 10, "0a'");  // a split vertex inside chart 0: not a pair
+    pairing.Done(0);
+    EXPECT_EQ(pairing.waiting(), 2u);
+    add(1, 10, "1a");
+    pairing.Done(1);  // chart 0's last neighbour: its side of key 20 is open
+    EXPECT_EQ(pairing.waiting(), 0u);
+    EXPECT_EQ(pairing.open(), 1u);
+    add(2, 20, "2b");
+    add(2, 10, "2a");  // a third chart on key 10 waits again
+    pairing.Done(2);
+    add(3, 10, "3a");
+    pairing.Done(3);
+    EXPECT_EQ(pairing.waiting(), 0u);
+    EXPECT_EQ(pairing.open(), 2u);  // 0b and 2b
+    const std::vector<std::pair<std::string, std::string>> want = {{"0a", "1a"}, {"2a", "3a"}};
+    EXPECT_EQ(pairs, want);
 }
 
 }  // namespace
