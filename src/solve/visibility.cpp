@@ -5,6 +5,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "solve/paged_visibility.h"
 
 #include <embree3/rtcore.h>
 
@@ -317,6 +318,11 @@ uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
     const size_t nv = positions.size() / 3, nt = indices.size() / 3;
     ValidateMesh(nv, indices, name);
     const uint32_t id = geometries_++;
+    if (paged_) {
+        paged_->Add(positions, indices);
+        triangles_ += nt;
+        return id;
+    }
     if (nt == 0)
         return id;  // nothing to trace; the id stays reserved
 
@@ -353,6 +359,11 @@ uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, s
     ValidateMesh(vertex_count, indices, name);
     const size_t nt = indices.size() / 3;
     const uint32_t id = geometries_++;
+    if (paged_) {  // the pieces copy what they keep
+        paged_->Add(positions.first(3 * vertex_count), indices);
+        triangles_ += nt;
+        return id;
+    }
     if (nt == 0)
         return id;
 
@@ -371,8 +382,18 @@ uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, s
     return id;
 }
 
+void VisibilityScene::EnablePaging(const PagingOptions& paging) {
+    CHECK(!committed_ && geometries_ == 0);
+    paged_ = std::make_unique<PagedVisibility>(options_, paging);
+}
+
 void VisibilityScene::Commit() {
     CHECK(!committed_);
+    if (paged_) {
+        paged_->Commit();
+        committed_ = true;
+        return;
+    }
     rtcCommitScene(impl_->scene);
     ThrowIfError("building the BVH (rtcCommitScene)");
     committed_ = true;
@@ -382,6 +403,8 @@ void VisibilityScene::Occluded(std::span<const Segment> segments,
                                std::span<uint8_t> occluded) const {
     CHECK(committed_);
     CHECK_EQ(segments.size(), occluded.size());
+    if (paged_)
+        return paged_->Occluded(segments, occluded);
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -433,6 +456,8 @@ void VisibilityScene::OccludedParallel(std::span<const Segment> segments,
 void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit> hits) const {
     CHECK(committed_);
     CHECK_EQ(segments.size(), hits.size());
+    if (paged_)
+        return paged_->Intersect(segments, hits);
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
