@@ -20,6 +20,18 @@ struct PagedVisibility::Cached {
     std::shared_ptr<const VisibilityScene> scene;  // null: not resident
     std::list<uint32_t>::iterator lru;
     uint64_t bytes = 0;
+    uint64_t rented = 0;  // triangles rented since the piece was last resident
+};
+
+struct PagedVisibility::Route {
+    std::vector<uint32_t> segments;  // ascending
+    std::vector<uint32_t> leaves;    // octree leaves crossed (repeats until Acquire)
+};
+
+struct PagedVisibility::Lease {
+    std::shared_ptr<const VisibilityScene> scene;
+    const uint32_t* global = nullptr;  // global triangle id of each of the scene's triangles
+    std::vector<uint32_t> rented;      // the ids, when the scene is rented
 };
 
 PagedVisibility::PagedVisibility(const VisibilityOptions& scene_options,
@@ -70,6 +82,7 @@ void PagedVisibility::Commit() {
     tree_ = stream::BuildTriangleOctree(pos, tris, oo);
     const stream::TriangleOctree& tree = tree_;
     leaf_piece_.assign(tree.nodes.size(), 0);
+    leaf_first_.assign(tree.nodes.size(), 0);
     constexpr uint32_t kNone = 0xFFFFFFFFu;
     std::vector<uint32_t> local(nv, kNone);  // a vertex's id in the piece being filled
     std::vector<uint32_t> globals;            // that piece's vertices, by local id
@@ -88,6 +101,7 @@ void PagedVisibility::Commit() {
         if (!piece.global.empty() && piece.global.size() + n.count > options_.piece_triangles)
             finish();
         leaf_piece_[leaf] = uint32_t(pieces_.size());
+        leaf_first_[leaf] = uint32_t(piece.global.size());
         for (uint32_t k = n.first; k < n.first + n.count; ++k) {
             const uint32_t t = tree.order[k];
             for (uint32_t v : tris[t]) {
@@ -105,29 +119,73 @@ void PagedVisibility::Commit() {
     cache_.resize(pieces_.size());
 }
 
-std::shared_ptr<const VisibilityScene> PagedVisibility::Acquire(uint32_t p) const {
+std::shared_ptr<const VisibilityScene> PagedVisibility::BuildPiece(uint32_t p) const {
+    const Piece& piece = pieces_[p];
+    auto scene = std::make_shared<VisibilityScene>(scene_options_);
+    scene->AddTriangles(piece.positions, piece.indices, "visibility piece");
+    scene->Commit();
+    return scene;
+}
+
+PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t>* leaves) const {
+    const Piece& piece = pieces_[p];
+    std::sort(leaves->begin(), leaves->end());
+    leaves->erase(std::unique(leaves->begin(), leaves->end()), leaves->end());
+    uint64_t triangles = 0;
+    for (uint32_t leaf : *leaves)
+        triangles += tree_.nodes[leaf].count;
+    Lease lease;
+    bool buy = false;
     {
         std::lock_guard lock(mutex_);
         Cached& c = cache_[p];
         if (c.scene) {
             hits_.fetch_add(1, std::memory_order_relaxed);
             lru_.splice(lru_.begin(), lru_, c.lru);
-            return c.scene;
+            lease.scene = c.scene;
+            lease.global = piece.global.data();
+            return lease;
         }
+        c.rented += triangles;
+        buy = c.rented >= piece.global.size();
     }
-    // Built outside the lock: Embree's build runs TBB tasks, which may be solver tasks that
-    // query this object on this very thread.
-    const Piece& piece = pieces_[p];
-    auto scene = std::make_shared<VisibilityScene>(scene_options_);
-    scene->AddTriangles(piece.positions, piece.indices, "visibility piece");
-    scene->Commit();
+    // Scenes are built outside the lock: Embree's build runs TBB tasks, which may be solver
+    // tasks that query this object on this very thread.
+    if (!buy) {
+        std::vector<float> positions;
+        std::vector<uint32_t> indices;
+        for (uint32_t leaf : *leaves)
+            for (uint32_t k = leaf_first_[leaf]; k < leaf_first_[leaf] + tree_.nodes[leaf].count;
+                 ++k) {
+                for (int j = 0; j < 3; ++j) {
+                    const uint32_t v = piece.indices[3 * size_t(k) + j];
+                    indices.push_back(uint32_t(positions.size() / 3));
+                    positions.insert(positions.end(), &piece.positions[3 * size_t(v)],
+                                     &piece.positions[3 * size_t(v)] + 3);
+                }
+                lease.rented.push_back(piece.global[k]);
+            }
+        auto scene = std::make_shared<VisibilityScene>(scene_options_);
+        scene->AddTriangles(positions, indices, "visibility piece leaves");
+        scene->Commit();
+        rentals_.fetch_add(1, std::memory_order_relaxed);
+        built_.fetch_add(triangles, std::memory_order_relaxed);
+        lease.scene = std::move(scene);
+        lease.global = lease.rented.data();
+        return lease;
+    }
+    auto scene = BuildPiece(p);
     loads_.fetch_add(1, std::memory_order_relaxed);
+    built_.fetch_add(piece.global.size(), std::memory_order_relaxed);
+    lease.global = piece.global.data();
     std::vector<std::shared_ptr<const VisibilityScene>> dropped;  // released after the lock
     std::lock_guard lock(mutex_);
     Cached& c = cache_[p];
+    c.rented = 0;
     if (c.scene) {  // another thread built it meanwhile
         lru_.splice(lru_.begin(), lru_, c.lru);
-        return c.scene;
+        lease.scene = c.scene;
+        return lease;
     }
     c.scene = scene;
     lru_.push_front(p);
@@ -140,23 +198,38 @@ std::shared_ptr<const VisibilityScene> PagedVisibility::Acquire(uint32_t p) cons
         resident_bytes_ -= old.bytes;
         dropped.push_back(std::move(old.scene));
     }
-    return scene;
+    lease.scene = std::move(scene);
+    return lease;
 }
 
-void PagedVisibility::Route(std::span<const Segment> segments,
-                            std::vector<std::vector<uint32_t>>* routes) const {
+void PagedVisibility::RouteSegments(std::span<const Segment> segments,
+                                    std::vector<Route>* routes) const {
     routes->resize(pieces_.size());
-    for (auto& r : *routes)
-        r.clear();
+    for (Route& r : *routes) {
+        r.segments.clear();
+        r.leaves.clear();
+    }
     for (uint32_t i = 0; i < segments.size(); ++i) {
         const Segment& s = segments[i];
         const Vec3f o(s.ox, s.oy, s.oz), d(s.dx, s.dy, s.dz);
         tree_.ForEachLeafOnSegment(o, d, s.tnear, s.tfar, [&](uint32_t leaf) {
-            std::vector<uint32_t>& r = (*routes)[leaf_piece_[leaf]];
-            if (r.empty() || r.back() != i)
-                r.push_back(i);
+            Route& r = (*routes)[leaf_piece_[leaf]];
+            if (r.segments.empty() || r.segments.back() != i)
+                r.segments.push_back(i);
+            r.leaves.push_back(leaf);
         });
     }
+}
+
+std::vector<uint32_t> PagedVisibility::TraceOrder(const std::vector<Route>& routes) const {
+    std::vector<uint32_t> order;
+    for (uint32_t p = 0; p < pieces_.size(); ++p)
+        if (!routes[p].segments.empty())
+            order.push_back(p);
+    std::lock_guard lock(mutex_);
+    std::stable_partition(order.begin(), order.end(),
+                          [&](uint32_t p) { return cache_[p].scene != nullptr; });
+    return order;
 }
 
 void PagedVisibility::GlobalId(uint32_t triangle, uint32_t* geom, uint32_t* prim) const {
@@ -165,54 +238,35 @@ void PagedVisibility::GlobalId(uint32_t triangle, uint32_t* geom, uint32_t* prim
     *prim = triangle - geometry_first_[*geom];
 }
 
-namespace {
-// A query's scratch. Not thread_local: while a piece is built, Embree's TBB tasks may run
-// another query on the same thread.
-struct Scratch {
-    std::vector<std::vector<uint32_t>> routes;
-    std::vector<uint32_t> index;
-    std::vector<Segment> segments;
-    std::vector<uint8_t> occluded;
-    std::vector<Hit> hits;
-    std::vector<uint32_t> best;
-};
-}  // namespace
-
 void PagedVisibility::Occluded(std::span<const Segment> segments,
                                std::span<uint8_t> occluded) const {
     CHECK_EQ(segments.size(), occluded.size());
     std::fill(occluded.begin(), occluded.end(), uint8_t(0));
     segments_.fetch_add(segments.size(), std::memory_order_relaxed);
-    Scratch s;
-    Route(segments, &s.routes);
-    // Resident pieces first: a segment they occlude needs no other piece (an OR, so the
-    // order does not change the answer).
-    std::vector<uint32_t> order;
-    for (uint32_t p = 0; p < pieces_.size(); ++p)
-        if (!s.routes[p].empty())
-            order.push_back(p);
-    {
-        std::lock_guard lock(mutex_);
-        std::stable_partition(order.begin(), order.end(),
-                              [&](uint32_t p) { return cache_[p].scene != nullptr; });
-    }
-    for (uint32_t p : order) {
-        // Segments already occluded by an earlier piece need not be traced again.
-        s.index.clear();
-        for (uint32_t i : s.routes[p])
+    // Per call, not thread_local: while a scene is built, Embree's TBB tasks may run another
+    // query on this thread.
+    std::vector<Route> routes;
+    RouteSegments(segments, &routes);
+    std::vector<uint32_t> index;
+    std::vector<Segment> batch;
+    std::vector<uint8_t> answer;
+    // Resident pieces first: a segment they occlude needs no other piece.
+    for (uint32_t p : TraceOrder(routes)) {
+        index.clear();
+        for (uint32_t i : routes[p].segments)
             if (!occluded[i])
-                s.index.push_back(i);
-        if (s.index.empty())
+                index.push_back(i);
+        if (index.empty())
             continue;
         requests_.fetch_add(1, std::memory_order_relaxed);
-        rays_.fetch_add(s.index.size(), std::memory_order_relaxed);
-        s.segments.clear();
-        for (uint32_t i : s.index)
-            s.segments.push_back(segments[i]);
-        s.occluded.assign(s.index.size(), 0);
-        Acquire(p)->Occluded(s.segments, s.occluded);
-        for (size_t k = 0; k < s.index.size(); ++k)
-            occluded[s.index[k]] |= s.occluded[k];
+        rays_.fetch_add(index.size(), std::memory_order_relaxed);
+        batch.clear();
+        for (uint32_t i : index)
+            batch.push_back(segments[i]);
+        answer.assign(index.size(), 0);
+        Acquire(p, &routes[p].leaves).scene->Occluded(batch, answer);
+        for (size_t k = 0; k < index.size(); ++k)
+            occluded[index[k]] |= answer[k];
     }
 }
 
@@ -220,31 +274,32 @@ void PagedVisibility::Intersect(std::span<const Segment> segments, std::span<Hit
     CHECK_EQ(segments.size(), hits.size());
     std::fill(hits.begin(), hits.end(), Hit{});
     segments_.fetch_add(segments.size(), std::memory_order_relaxed);
-    Scratch s;
-    s.best.assign(segments.size(), kNoHit);  // global triangle id of hits[i]
-    Route(segments, &s.routes);
-    for (uint32_t p = 0; p < pieces_.size(); ++p) {
-        const std::vector<uint32_t>& index = s.routes[p];
-        if (index.empty())
-            continue;
+    std::vector<Route> routes;
+    RouteSegments(segments, &routes);
+    std::vector<uint32_t> best(segments.size(), kNoHit);  // global triangle id of hits[i]
+    std::vector<Segment> batch;
+    std::vector<Hit> answer;
+    for (uint32_t p : TraceOrder(routes)) {
+        const std::vector<uint32_t>& index = routes[p].segments;
         requests_.fetch_add(1, std::memory_order_relaxed);
         rays_.fetch_add(index.size(), std::memory_order_relaxed);
-        s.segments.clear();
+        batch.clear();
         for (uint32_t i : index)
-            s.segments.push_back(segments[i]);
-        s.hits.assign(index.size(), Hit{});
-        Acquire(p)->Intersect(s.segments, s.hits);
+            batch.push_back(segments[i]);
+        answer.assign(index.size(), Hit{});
+        const Lease lease = Acquire(p, &routes[p].leaves);
+        lease.scene->Intersect(batch, answer);
         for (size_t k = 0; k < index.size(); ++k) {
-            const Hit& h = s.hits[k];
+            const Hit& h = answer[k];
             if (h.geom_id == kNoHit)
                 continue;
-            const uint32_t i = index[k], id = pieces_[p].global[h.prim_id];
+            const uint32_t i = index[k], id = lease.global[h.prim_id];
             // The nearest; at equal t the lowest global triangle (a fixed rule, any order).
-            if (s.best[i] != kNoHit && !(h.t < hits[i].t || (h.t == hits[i].t && id < s.best[i])))
+            if (best[i] != kNoHit && !(h.t < hits[i].t || (h.t == hits[i].t && id < best[i])))
                 continue;
             hits[i] = h;
             GlobalId(id, &hits[i].geom_id, &hits[i].prim_id);
-            s.best[i] = id;
+            best[i] = id;
         }
     }
 }
@@ -258,6 +313,8 @@ PagingStats PagedVisibility::stats() const {
     st.requests = requests_.load();
     st.hits = hits_.load();
     st.loads = loads_.load();
+    st.rentals = rentals_.load();
+    st.built_triangles = built_.load();
     st.rays = rays_.load();
     return st;
 }

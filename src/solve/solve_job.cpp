@@ -81,8 +81,11 @@ nlohmann::json VisibilityJson(const VisibilityScene& vis) {
     j["hits"] = st.hits;
     j["hit_rate"] = st.requests ? double(st.hits) / double(st.requests) : 1.0;
     j["loads"] = st.loads;
+    j["rentals"] = st.rentals;
+    j["built_triangles"] = st.built_triangles;
     j["rays"] = st.rays;
-    j["rays_per_load"] = st.loads ? double(st.rays) / double(st.loads) : 0.0;
+    j["rays_per_build"] =
+        st.loads + st.rentals ? double(st.rays) / double(st.loads + st.rentals) : 0.0;
     j["rays_per_segment"] = st.segments ? double(st.rays) / double(st.segments) : 0.0;
     return j;
 }
@@ -541,10 +544,11 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     stats["visibility"] = VisibilityJson(vis);
     if (vis.paged()) {
         const PagingStats ps = vis.paged()->stats();
-        spdlog::info("visibility pieces: {} of {} requests resident ({:.1f}%), {} loads, {} rays "
-                     "per load",
+        spdlog::info("visibility pieces: {} of {} requests resident ({:.1f}%), {} pieces "
+                     "loaded, {} leaf sets rented, {} triangles built, {} rays per build",
                      ps.hits, ps.requests, ps.requests ? 100.0 * ps.hits / ps.requests : 100.0,
-                     ps.loads, ps.loads ? ps.rays / ps.loads : 0);
+                     ps.loads, ps.rentals, FormatCount(double(ps.built_triangles)),
+                     ps.loads + ps.rentals ? ps.rays / (ps.loads + ps.rentals) : 0);
     }
     const std::string text = stats.dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
