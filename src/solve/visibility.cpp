@@ -95,9 +95,9 @@ void ThrowIfError(const char* what) {
     std::string msg = t_last_error.empty() ? ErrorName(e) : t_last_error;
     t_last_error.clear();
     if (e == RTC_ERROR_OUT_OF_MEMORY && g_limit.load() > 0)
-        msg += fmt::format(" [Embree memory limit {} bytes, half of --memory: the visibility "
-                           "mesh, sized at ingest to 64 MiB of Embree scene whatever the "
-                           "budget, needs --memory 256M]",
+        msg += fmt::format(" [Embree memory limit {} bytes, min(128 MiB, --memory / 2): the "
+                           "visibility mesh is paged in pieces under it (paged_visibility.h); "
+                           "a larger --memory leaves more room]",
                            g_limit.load());
     throw Error(ErrorKind::Io, fmt::format("Embree: {} failed: {}", what, msg));
 }
