@@ -10,8 +10,8 @@
 // - a missing one is rented or bought (ski rental): a scene of just the leaves this call's
 //   segments cross is built, traced and dropped, until the triangles so built for the piece
 //   reach its size; then the whole piece is built into the LRU. So the build work is at most
-//   twice what knowing the future would have cost, and small calls (the solver's are ~10
-//   segments) do not rebuild whole pieces for a few rays.
+//   twice what knowing the future would have cost, and small calls (the solver's bring ~20
+//   segments per piece) do not rebuild whole pieces for a few rays.
 // Answers: occlusion is the OR over pieces: a triangle's test does not depend on which scene
 // holds it (same flags, watertight test), so the bits equal the whole scene's; closest hit
 // is the smallest t over pieces, ties to the lowest (geometry, primitive): the whole scene's
