@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <malloc.h>
 
 namespace mebake::solve {
 
@@ -168,7 +169,11 @@ PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t
         auto scene = std::make_shared<VisibilityScene>(scene_options_);
         scene->AddTriangles(positions, indices, "visibility piece leaves");
         scene->Commit();
-        rentals_.fetch_add(1, std::memory_order_relaxed);
+        // Rented scenes are freed at once, but the heap keeps their pages: give them back to
+        // the system now and then (16M sphere at --memory 128M: resident
+        // after the direct pass 110 -> 76 MiB).
+        if (rentals_.fetch_add(1, std::memory_order_relaxed) % 256 == 255)
+            malloc_trim(0);
         built_.fetch_add(triangles, std::memory_order_relaxed);
         lease.scene = std::move(scene);
         lease.global = lease.rented.data();

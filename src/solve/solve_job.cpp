@@ -46,8 +46,9 @@ constexpr size_t kMaxEmissiveTriangles = 256;
 
 // Pages the visibility mesh when its Embree scene (estimated as ingest sizes it) would exceed
 // half the Embree cap, the other half leaving room for the build's peak; or when forced.
-// Resident pieces take that half at most, pieces a quarter of it each, so with one piece
-// pinned per thread beyond the LRU and one being built, Embree stays under its cap.
+// Resident pieces take a quarter of the cap, pieces a quarter of that each: Embree stays
+// well under its cap with a piece pinned per thread and one being built, and the solve's
+// peak RSS under --memory (16M sphere at 128M: 104 MiB; with half the cap resident, 136).
 void ConfigurePaging(const SolveJobOptions& opt, const stream::Manifest& m,
                      const MemoryBudget& budget, VisibilityScene& vis) {
     const uint64_t share = budget.EmbreeLimit() / 2;
@@ -55,10 +56,10 @@ void ConfigurePaging(const SolveJobOptions& opt, const stream::Manifest& m,
     if (opt.paged_visibility == 0 && scene_bytes <= share)
         return;
     PagingOptions po;
-    po.cache_bytes = opt.paged_cache > 0 ? opt.paged_cache : share;
+    po.cache_bytes = opt.paged_cache > 0 ? opt.paged_cache : share / 2;
     po.piece_triangles = opt.paged_visibility > 0
                              ? opt.paged_visibility
-                             : uint32_t(std::max<uint64_t>(share / 4 / kPieceBytesPerTriangle, 1));
+                             : uint32_t(std::max<uint64_t>(share / 8 / kPieceBytesPerTriangle, 1));
     spdlog::info("visibility paged: {} triangles (~{} of Embree scene, share {}) in pieces of at "
                  "most {}, {} resident",
                  FormatCount(double(m.proxy_triangles)), FormatBytes(scene_bytes),
