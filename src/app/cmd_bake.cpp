@@ -86,6 +86,13 @@ int RunSolve(const SolveCommand& c) {
     opt.checkpoint_interval = c.checkpoint_interval;
     opt.resume = c.resume;
     opt.force = c.force;
+    opt.paged_visibility = c.paged_visibility;
+    if (!c.paged_cache.empty()) {
+        const auto bytes = ParseByteSize(c.paged_cache);
+        if (!bytes || *bytes == 0)
+            UsageError("--paged-cache '{}': expected a size such as 16M", c.paged_cache);
+        opt.paged_cache = *bytes;
+    }
     auto st = solve::RunSolveJob(opt);
     if (st.stop_reason == "already solved")
         return 0;

@@ -60,6 +60,8 @@ struct SolveCommand {
     double checkpoint_interval = 30;  // seconds between checkpoints (0: every batch; < 0: never)
     bool resume = false;              // continue from the last good checkpoint
     bool force = false;               // discard checkpoints, solve from the start
+    uint32_t paged_visibility = 0;    // > 0: trace the proxy in pieces of this many triangles
+    std::string paged_cache;          // resident pieces' bytes (e.g. 8M); empty: the budget's
 };
 int RunSolve(const SolveCommand& opt);
 

@@ -159,6 +159,13 @@ int main(int argc, char** argv) {
                                          "Continue an interrupted solve from its last good checkpoint");
     sol_cmd->add_flag("-f,--force", sol.force, "Discard checkpoints and solve from the start")
         ->excludes(sol_resume);
+    sol_cmd->add_option("--paged-visibility", sol.paged_visibility,
+                        "Trace the visibility mesh in spatial pieces of at most this many "
+                        "triangles through an LRU of Embree scenes (same results; automatic when "
+                        "the mesh exceeds its share of --memory)");
+    sol_cmd->add_option("--paged-cache", sol.paged_cache,
+                        "With paged visibility: bytes of piece scenes kept resident (e.g. 16M; "
+                        "default: the budget's share)");
 
     // reference, compare  (#include "app/reference_commands.h")
     mebake::app::ReferenceCommand ref;

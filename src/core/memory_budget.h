@@ -49,8 +49,8 @@ public:
     uint64_t CoefficientPools() const;
     // Solve: a hard cap on Embree's own allocations (its memory monitor): twice the
     // visibility share (the share sizes the scene; the cap allows for Embree's build
-    // peak), at most half the budget, so under 256M a large visibility mesh fails with a
-    // clear error instead of exceeding the budget.
+    // peak), at most half the budget; under 256M a visibility mesh too large for it is
+    // traced in pieces (solve/paged_visibility.h) instead of exceeding the budget.
     uint64_t EmbreeLimit() const;
 
     // Export: the page cache of each of the vertex colours' disk arrays (the running sums

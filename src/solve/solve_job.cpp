@@ -13,6 +13,7 @@
 #include "solve/checkpoint.h"
 #include "solve/field_pool.h"
 #include "solve/geometry_cache.h"
+#include "solve/paged_visibility.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/solve_eta.h"
@@ -42,6 +43,53 @@ namespace {
 // Emissive surfaces with at most this many triangles become polygon lights (exact
 // direct light); larger ones shoot their emission through the solver.
 constexpr size_t kMaxEmissiveTriangles = 256;
+
+// Pages the visibility mesh when its Embree scene (estimated as ingest sizes it) would exceed
+// half the Embree cap, the other half leaving room for the build's peak; or when forced.
+// Resident pieces take a quarter of the cap, pieces a quarter of that each: Embree stays
+// well under its cap with a piece pinned per thread and one being built, and the solve's
+// peak RSS under --memory (16M sphere at 128M: 104 MiB; with half the cap resident, 136).
+void ConfigurePaging(const SolveJobOptions& opt, const stream::Manifest& m,
+                     const MemoryBudget& budget, VisibilityScene& vis) {
+    const uint64_t share = budget.EmbreeLimit() / 2;
+    const uint64_t scene_bytes = m.proxy_triangles * kPieceBytesPerTriangle;
+    if (opt.paged_visibility == 0 && scene_bytes <= share)
+        return;
+    PagingOptions po;
+    po.cache_bytes = opt.paged_cache > 0 ? opt.paged_cache : share / 2;
+    po.piece_triangles = opt.paged_visibility > 0
+                             ? opt.paged_visibility
+                             : uint32_t(std::max<uint64_t>(share / 8 / kPieceBytesPerTriangle, 1));
+    spdlog::info("visibility paged: {} triangles (~{} of Embree scene, share {}) in pieces of at "
+                 "most {}, {} resident",
+                 FormatCount(double(m.proxy_triangles)), FormatBytes(scene_bytes),
+                 FormatBytes(share), FormatCount(double(po.piece_triangles)),
+                 FormatBytes(po.cache_bytes));
+    vis.EnablePaging(po);
+}
+
+nlohmann::json VisibilityJson(const VisibilityScene& vis) {
+    nlohmann::json j;
+    j["paged"] = vis.paged() != nullptr;
+    j["triangles"] = vis.triangle_count();
+    if (!vis.paged())
+        return j;
+    const PagingStats st = vis.paged()->stats();
+    j["pieces"] = st.pieces;
+    j["largest_piece"] = st.largest_piece;
+    j["segments"] = st.segments;
+    j["requests"] = st.requests;
+    j["hits"] = st.hits;
+    j["hit_rate"] = st.requests ? double(st.hits) / double(st.requests) : 1.0;
+    j["loads"] = st.loads;
+    j["rentals"] = st.rentals;
+    j["built_triangles"] = st.built_triangles;
+    j["rays"] = st.rays;
+    j["rays_per_build"] =
+        st.loads + st.rentals ? double(st.rays) / double(st.loads + st.rentals) : 0.0;
+    j["rays_per_segment"] = st.segments ? double(st.rays) / double(st.segments) : 0.0;
+    return j;
+}
 
 void LoadProxy(const std::string& dir, VisibilityScene& vis) {
     io::ChunkReader r(stream::ProxyPath(dir), io::Tag("PRXY"), 1, 1);
@@ -445,6 +493,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
     const bool shoot_emission = AddEmissiveLights(opt.dir, m, &scene);
 
     VisibilityScene vis;
+    ConfigurePaging(opt, m, budget, vis);
     LoadProxy(opt.dir, vis);
     LogMemory("visibility scene built");
     const double diag = Length(m.bbox_max - m.bbox_min);
@@ -491,8 +540,18 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
 
     // The scene file and the statistics go first: solution.bin is the commit point.
     KeepSceneFile(opt);
-    const std::string text =
-        StatsJson(opt, so, charts.size(), st, total, geometry.get(), pool.get(), checkpoints).dump(2) + "\n";
+    nlohmann::json stats =
+        StatsJson(opt, so, charts.size(), st, total, geometry.get(), pool.get(), checkpoints);
+    stats["visibility"] = VisibilityJson(vis);
+    if (vis.paged()) {
+        const PagingStats ps = vis.paged()->stats();
+        spdlog::info("visibility pieces: {} of {} requests resident ({:.1f}%), {} pieces "
+                     "loaded, {} leaf sets rented, {} triangles built, {} rays per build",
+                     ps.hits, ps.requests, ps.requests ? 100.0 * ps.hits / ps.requests : 100.0,
+                     ps.loads, ps.rentals, FormatCount(double(ps.built_triangles)),
+                     ps.loads + ps.rentals ? ps.rays / (ps.loads + ps.rentals) : 0);
+    }
+    const std::string text = stats.dump(2) + "\n";
     for (const auto& path : {opt.dir + "/solve/stats.json", opt.stats_file}) {
         if (path.empty())
             continue;

@@ -29,6 +29,11 @@ struct SolveJobOptions {
     double checkpoint_interval = 30;  // seconds; 0: at every batch boundary; < 0: only on signals
     bool resume = false;              // continue from a checkpoint / keep a matching solution
     bool force = false;               // discard checkpoints and solve from the start
+    // Paged visibility (paged_visibility.h), used on its own when the proxy's Embree scene
+    // would exceed half the Embree cap of --memory. > 0 forces it, with pieces of at most
+    // this many triangles; paged_cache > 0 sets the resident pieces' bytes (else the share).
+    uint32_t paged_visibility = 0;
+    uint64_t paged_cache = 0;
 };
 
 SolveStats RunSolveJob(const SolveJobOptions& opt);

@@ -5,6 +5,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "solve/paged_visibility.h"
 
 #include <embree3/rtcore.h>
 
@@ -94,9 +95,9 @@ void ThrowIfError(const char* what) {
     std::string msg = t_last_error.empty() ? ErrorName(e) : t_last_error;
     t_last_error.clear();
     if (e == RTC_ERROR_OUT_OF_MEMORY && g_limit.load() > 0)
-        msg += fmt::format(" [Embree memory limit {} bytes, half of --memory: the visibility "
-                           "mesh, sized at ingest to 64 MiB of Embree scene whatever the "
-                           "budget, needs --memory 256M]",
+        msg += fmt::format(" [Embree memory limit {} bytes, min(128 MiB, --memory / 2): the "
+                           "visibility mesh is paged in pieces under it (paged_visibility.h); "
+                           "a larger --memory leaves more room]",
                            g_limit.load());
     throw Error(ErrorKind::Io, fmt::format("Embree: {} failed: {}", what, msg));
 }
@@ -317,6 +318,11 @@ uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
     const size_t nv = positions.size() / 3, nt = indices.size() / 3;
     ValidateMesh(nv, indices, name);
     const uint32_t id = geometries_++;
+    if (paged_) {
+        paged_->Add(positions, indices);
+        triangles_ += nt;
+        return id;
+    }
     if (nt == 0)
         return id;  // nothing to trace; the id stays reserved
 
@@ -353,6 +359,11 @@ uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, s
     ValidateMesh(vertex_count, indices, name);
     const size_t nt = indices.size() / 3;
     const uint32_t id = geometries_++;
+    if (paged_) {  // the pieces copy what they keep
+        paged_->Add(positions.first(3 * vertex_count), indices);
+        triangles_ += nt;
+        return id;
+    }
     if (nt == 0)
         return id;
 
@@ -371,8 +382,18 @@ uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, s
     return id;
 }
 
+void VisibilityScene::EnablePaging(const PagingOptions& paging) {
+    CHECK(!committed_ && geometries_ == 0);
+    paged_ = std::make_unique<PagedVisibility>(options_, paging);
+}
+
 void VisibilityScene::Commit() {
     CHECK(!committed_);
+    if (paged_) {
+        paged_->Commit();
+        committed_ = true;
+        return;
+    }
     rtcCommitScene(impl_->scene);
     ThrowIfError("building the BVH (rtcCommitScene)");
     committed_ = true;
@@ -382,6 +403,8 @@ void VisibilityScene::Occluded(std::span<const Segment> segments,
                                std::span<uint8_t> occluded) const {
     CHECK(committed_);
     CHECK_EQ(segments.size(), occluded.size());
+    if (paged_)
+        return paged_->Occluded(segments, occluded);
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -433,6 +456,8 @@ void VisibilityScene::OccludedParallel(std::span<const Segment> segments,
 void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit> hits) const {
     CHECK(committed_);
     CHECK_EQ(segments.size(), hits.size());
+    if (paged_)
+        return paged_->Intersect(segments, hits);
     FlushDenormals ftz;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);

@@ -40,6 +40,9 @@ struct Hit {
     uint32_t geom_id = kNoHit, prim_id = kNoHit;  // kNoHit when nothing was hit
 };
 
+class PagedVisibility;  // paged_visibility.h
+struct PagingOptions;
+
 enum class BuildQuality { kLow, kMedium, kHigh };
 
 // How batches are traced. All give identical answers; they differ in speed (see
@@ -84,7 +87,15 @@ public:
     uint32_t AddTrianglesShared(std::span<const float> positions, size_t vertex_count,
                                 std::span<const uint32_t> indices, const char* name = "mesh");
 
-    // Builds the BVH. Throws Error if Embree fails (e.g. over the memory limit).
+    // Paged mode, set before anything is added: the triangles are kept (copied) and split
+    // into spatial pieces at Commit, whose Embree scenes are built when a query needs them and
+    // kept in an LRU of paging.cache_bytes (paged_visibility.h). Same answers as one scene.
+    void EnablePaging(const PagingOptions& paging);
+    // The pieces and their statistics in paged mode; null otherwise.
+    const PagedVisibility* paged() const { return paged_.get(); }
+
+    // Builds the BVH (in paged mode: the pieces). Throws Error if Embree fails (e.g. over the
+    // memory limit).
     void Commit();
 
     // occluded[i] = 1 if a triangle intersects segment i, else 0. Thread-safe after Commit.
@@ -101,6 +112,7 @@ public:
 private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
+    std::unique_ptr<PagedVisibility> paged_;
     VisibilityOptions options_;
     uint64_t triangles_ = 0;
     bool committed_ = false;

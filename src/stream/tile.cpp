@@ -42,11 +42,21 @@ void WriteTile(const std::string& path, const ChartTile& t) {
     w.AddArray(Tag("GNTR"), 0, t.grid.near_tris);
     w.AddArray(Tag("GOUT"), 0, t.grid.outline_tris);
     w.AddArray(Tag("GEO0"), 0, t.geometry.levels.back());
+    // Derived from the mesh written, so it can never disagree with it.
+    const TriangleOctree octree = BuildTriangleOctree(
+        t.position, std::span<const std::array<uint32_t, 3>>(t.triangles), kTileOctree);
+    w.AddArray(Tag("OCND"), 0, octree.nodes);
+    w.AddArray(Tag("OCTR"), 0, octree.order);
     w.Finish();
 }
 
 ChartTile ReadTile(const std::string& path, TileParts parts) {
-    io::ChunkReader r(path, kKind, kTileVersion, kTileVersion);
+    io::ChunkReader r(path, kKind, 1, kTileVersion);
+    if (r.version() < kTileVersion)
+        CorruptError({path, 8},
+                     "tile format version {} predates the tiles' octrees (version {}): ingest the "
+                     "scan again",
+                     r.version(), kTileVersion);
     ChartTile t;
     auto meta = r.Read(Tag("META"));
     if (meta.size() != sizeof(ChartMeta)) CorruptError({path}, "META chunk has the wrong size");
@@ -95,6 +105,9 @@ ChartTile ReadTile(const std::string& path, TileParts parts) {
         if (x >= nt) CorruptError({path}, "grid names triangle {} of {}", x, nt);
     for (uint32_t x : g.near_tris)
         if (x >= nt) CorruptError({path}, "grid names triangle {} of {}", x, nt);
+    t.octree.nodes = r.ReadArray<OctreeNode>(Tag("OCND"));
+    t.octree.order = r.ReadArray<uint32_t>(Tag("OCTR"));
+    CheckTriangleOctree(t.octree, nt, path.c_str());
     return t;
 }
 

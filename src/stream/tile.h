@@ -6,6 +6,7 @@
 //   FGID  uint64 global input triangle id (kNoId for hole fill)   FMAT  packed material id
 //   GCST/GCTR/GNST/GNTR/GOUT  the ChartGrid's arrays (point location over the square)
 //   GEO0  the finest level of the geometry image (coarser levels are rebuilt on load)
+//   OCND/OCTR  the octree of the triangles (tile_octree.h): nodes, triangle order (version 2)
 #pragma once
 
 #include <array>
@@ -16,10 +17,14 @@
 #include "core/vec.h"
 #include "stream/chart_grid.h"
 #include "stream/geometry_image.h"
+#include "stream/tile_octree.h"
 
 namespace mebake::stream {
 
-constexpr uint32_t kTileVersion = 1;
+// 2: the octree chunks (version 1 tiles are refused with a message to ingest again).
+constexpr uint32_t kTileVersion = 2;
+// The tiles' octrees: leaves of at most this many triangles, at most this deep.
+inline constexpr OctreeOptions kTileOctree{32, 12};
 
 struct ChartMeta {
     uint32_t chart = 0, brick = 0;
@@ -49,6 +54,7 @@ struct ChartTile {
     std::vector<uint32_t> material;
     ChartGrid grid;
     GeometryImage geometry;
+    TriangleOctree octree;  // read with the mesh; WriteTile builds it from the mesh
 };
 
 void WriteTile(const std::string& path, const ChartTile& tile);

@@ -1,0 +1,83 @@
+// An octree over a set of triangles: the 3D index each chart tile carries (chunks OCND and
+// OCTR, docs/file-formats.md), and the spatial split of the visibility mesh into the pieces
+// the paged visibility traces (solve/paged_visibility.h).
+//
+// Cells halve the cube around the triangles' centroids; a triangle belongs to the cell of its
+// centroid, so every triangle is in exactly one leaf. The node boxes are the tight boxes of
+// their triangles' vertices (they may overlap a neighbour's), so a query that misses a node's
+// box misses all its triangles. Deterministic: the order of the nodes and triangles depends
+// on the input only (a stable partition by octant, children in octant order).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mebake::stream {
+
+struct OctreeNode {
+    Vec3f lo{}, hi{};        // tight box of the node's triangles
+    uint32_t first = 0;      // the node's triangles: order[first, first + count)
+    uint32_t count = 0;
+    uint32_t child = 0;      // index of the first child (children are contiguous); 0: a leaf
+    uint32_t children = 0;   // number of children (1..8; 0 for a leaf)
+};
+static_assert(sizeof(OctreeNode) == 40, "OctreeNode is written as raw bytes");
+
+struct TriangleOctree {
+    std::vector<OctreeNode> nodes;  // nodes[0] is the root (absent when there are no triangles)
+    std::vector<uint32_t> order;    // triangle indices, each leaf's contiguous
+
+    bool empty() const { return nodes.empty(); }
+    // The leaves in depth-first order (children in octant order): spatially coherent runs.
+    std::vector<uint32_t> Leaves() const;
+    // Calls visit(leaf) for every leaf whose box the segment o + t d, t in [t0, t1], crosses
+    // (a conservative slab test), in depth-first order.
+    template <typename Visit>
+    void ForEachLeafOnSegment(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                              Visit&& visit) const;
+};
+
+struct OctreeOptions {
+    uint32_t leaf_triangles = 32;  // a node with more is split...
+    int max_depth = 12;            // ...unless it is this deep
+};
+
+TriangleOctree BuildTriangleOctree(std::span<const Vec3f> positions,
+                                   std::span<const std::array<uint32_t, 3>> triangles,
+                                   const OctreeOptions& options = {});
+
+// Whether the segment o + t d, t in [t0, t1], may cross the box [lo, hi]: the slab test,
+// widened by a relative margin so that a ray grazing a face is never culled by rounding.
+bool SegmentMayCrossBox(const Vec3f& o, const Vec3f& d, float t0, float t1, const Vec3f& lo,
+                        const Vec3f& hi);
+
+// Throws Error(Corrupt) naming `file` unless the octree is well formed over `triangle_count`
+// triangles (node ranges nested, children in range, every triangle in exactly one leaf).
+void CheckTriangleOctree(const TriangleOctree& tree, size_t triangle_count, const char* file);
+
+template <typename Visit>
+void TriangleOctree::ForEachLeafOnSegment(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                                          Visit&& visit) const {
+    if (nodes.empty())
+        return;
+    uint32_t stack[8 * 32];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const OctreeNode& n = nodes[stack[--top]];
+        if (!SegmentMayCrossBox(o, d, t0, t1, n.lo, n.hi))
+            continue;
+        if (n.children == 0) {
+            visit(uint32_t(&n - nodes.data()));
+            continue;
+        }
+        for (uint32_t c = n.children; c-- > 0;)  // pushed in reverse: popped in octant order
+            stack[top++] = n.child + c;
+    }
+}
+
+}  // namespace mebake::stream

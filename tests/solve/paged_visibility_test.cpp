@@ -1,0 +1,211 @@
+// Paged visibility (solve/paged_visibility.h) gives a whole scene's answers, whatever the
+// piece size, the cache and the threads.
+#include "solve/paged_visibility.h"
+
+#include "core/parallel.h"
+#include "core/vec.h"
+#include "solve/visibility.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+namespace mebake::solve {
+namespace {
+
+struct Geometry {
+    std::vector<float> p;
+    std::vector<uint32_t> t;
+};
+
+// A bumpy sphere (coherent, like a scan) centred at c.
+Geometry Sphere(int n, Vec3f c, float radius) {
+    Geometry g;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= 2 * n; ++i) {
+            const double th = M_PI * j / n, ph = M_PI * i / n;
+            const double r = radius * (1 + 0.1 * std::sin(9 * th) * std::cos(7 * ph));
+            g.p.insert(g.p.end(), {float(c.x + r * std::sin(th) * std::cos(ph)),
+                                   float(c.y + r * std::sin(th) * std::sin(ph)),
+                                   float(c.z + r * std::cos(th))});
+        }
+    const uint32_t w = uint32_t(2 * n + 1);
+    for (uint32_t j = 0; j < uint32_t(n); ++j)
+        for (uint32_t i = 0; i < uint32_t(2 * n); ++i) {
+            const uint32_t a = j * w + i;
+            g.t.insert(g.t.end(), {a, a + 1, a + w + 1, a, a + w + 1, a + w});
+        }
+    return g;
+}
+
+// Random small triangles in the box [-2, 2]^3.
+Geometry Soup(int n, unsigned seed) {
+    Geometry g;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> f(-2, 2), e(-0.2f, 0.2f);
+    for (int k = 0; k < n; ++k) {
+        const Vec3f c(f(rng), f(rng), f(rng));
+        for (int v = 0; v < 3; ++v)
+            g.p.insert(g.p.end(), {c.x + e(rng), c.y + e(rng), c.z + e(rng)});
+        g.t.insert(g.t.end(), {uint32_t(3 * k), uint32_t(3 * k + 1), uint32_t(3 * k + 2)});
+    }
+    return g;
+}
+
+// The geometries: two spheres, an empty one (ids must stay aligned), a soup.
+std::vector<Geometry> Scene() {
+    return {Sphere(40, Vec3f(-0.8f, 0, 0), 0.7f), Sphere(30, Vec3f(0.9f, 0.2f, 0.1f), 0.6f), {},
+            Soup(1500, 3)};
+}
+
+void Fill(VisibilityScene* scene, const std::vector<Geometry>& geoms) {
+    for (const Geometry& g : geoms)
+        scene->AddTriangles(g.p, g.t);
+    scene->Commit();
+}
+
+std::vector<Segment> Segments(int n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> f(-2.5f, 2.5f), u(0, 1);
+    std::vector<Segment> segs;
+    for (int i = 0; i < n; ++i) {
+        Segment s{f(rng), f(rng), f(rng), 0, f(rng), f(rng), f(rng), 1};
+        if (i % 5 == 0)
+            s.tfar = INFINITY;  // rays
+        if (i % 13 == 0)
+            s.tnear = u(rng);
+        if (i % 17 == 0)
+            s.dx = s.dy = 0;  // axis-parallel
+        segs.push_back(s);
+    }
+    return segs;
+}
+
+TEST(PagedVisibility, SameAnswersAsOneSceneForAnyPiecesAndCache) {
+    const auto geoms = Scene();
+    const std::vector<Segment> segs = Segments(20000, 9);
+    VisibilityScene whole;
+    Fill(&whole, geoms);
+    std::vector<uint8_t> occ(segs.size());
+    std::vector<Hit> hits(segs.size());
+    whole.Occluded(segs, occ);
+    whole.Intersect(segs, hits);
+    size_t occluded = 0;
+    for (uint8_t o : occ)
+        occluded += o;
+    EXPECT_GT(occluded, segs.size() / 5);
+    EXPECT_LT(occluded, segs.size() * 4 / 5);
+
+    for (uint32_t piece : {100u, 2000u, 1000000u})
+        for (uint64_t cache : {uint64_t(1), uint64_t(1) << 30}) {
+            PagingOptions po;
+            po.piece_triangles = piece;
+            po.cache_bytes = cache;
+            VisibilityScene paged;
+            paged.EnablePaging(po);
+            Fill(&paged, geoms);
+            ASSERT_NE(paged.paged(), nullptr);
+            EXPECT_EQ(paged.triangle_count(), whole.triangle_count());
+            // In chunks, as the solver asks: the cache state changes between calls.
+            std::vector<uint8_t> pocc(segs.size());
+            std::vector<Hit> phits(segs.size());
+            for (size_t lo = 0; lo < segs.size(); lo += 500) {
+                const size_t n = std::min<size_t>(500, segs.size() - lo);
+                paged.Occluded(std::span(segs).subspan(lo, n), std::span(pocc).subspan(lo, n));
+                paged.Intersect(std::span(segs).subspan(lo, n), std::span(phits).subspan(lo, n));
+            }
+            EXPECT_EQ(pocc, occ) << "pieces of " << piece << ", cache " << cache;
+            size_t differ = 0, ties = 0;
+            for (size_t i = 0; i < segs.size(); ++i) {
+                const Hit &a = hits[i], &b = phits[i];
+                ASSERT_EQ(a.geom_id == kNoHit, b.geom_id == kNoHit) << i;
+                ASSERT_EQ(a.t, b.t) << i;
+                if (a.geom_id != b.geom_id || a.prim_id != b.prim_id) {
+                    ++ties;  // the same distance on another triangle (a shared edge)
+                    continue;
+                }
+                differ += a.u != b.u || a.v != b.v || a.ng_x != b.ng_x || a.ng_y != b.ng_y ||
+                          a.ng_z != b.ng_z;
+            }
+            EXPECT_EQ(differ, 0u);
+            EXPECT_LT(ties, segs.size() / 1000);
+            const PagingStats st = paged.paged()->stats();
+            std::printf("pieces of %u (%llu, largest %llu), cache %llu: %llu requests, %llu hits, "
+                        "%llu loads, %llu rentals, %llu triangles built, %.2f rays per segment, "
+                        "%llu ties\n",
+                        piece, (unsigned long long)st.pieces, (unsigned long long)st.largest_piece,
+                        (unsigned long long)cache, (unsigned long long)st.requests,
+                        (unsigned long long)st.hits, (unsigned long long)st.loads,
+                        (unsigned long long)st.rentals, (unsigned long long)st.built_triangles,
+                        double(st.rays) / double(st.segments), (unsigned long long)ties);
+            EXPECT_LE(st.largest_piece, piece);
+            EXPECT_EQ(st.requests, st.hits + st.loads + st.rentals);  // one thread
+            if (piece == 100u) {
+                EXPECT_GT(st.pieces, 50u);
+                // Routing by the octree's leaves: a segment meets a few pieces, not all.
+                EXPECT_LT(double(st.rays) / double(st.segments), 0.25 * double(st.pieces));
+            }
+            if (cache == 1 && st.pieces > 1) {
+                EXPECT_GT(st.loads + st.rentals, st.pieces);  // a one-piece cache rebuilds
+            }
+            if (cache > 1) {
+                EXPECT_LE(st.loads, st.pieces);  // bought once, then resident
+            }
+        }
+}
+
+TEST(PagedVisibility, ConcurrentQueriesMatchSerial) {
+    const auto geoms = Scene();
+    const std::vector<Segment> segs = Segments(30000, 12);
+    PagingOptions po;
+    po.piece_triangles = 500;
+    po.cache_bytes = 3 * 500 * kPieceBytesPerTriangle;  // three pieces of the ~20
+    VisibilityScene paged;
+    paged.EnablePaging(po);
+    Fill(&paged, geoms);
+    VisibilityScene whole;
+    Fill(&whole, geoms);
+    std::vector<uint8_t> serial(segs.size()), parallel(segs.size()), tasks(segs.size());
+    whole.Occluded(segs, serial);
+    paged.OccludedParallel(segs, parallel);
+    EXPECT_EQ(serial, parallel);
+    TaskGroup group;
+    const size_t half = segs.size() / 2;
+    group.Run([&] {
+        paged.Occluded(std::span(segs).subspan(0, half), std::span(tasks).subspan(0, half));
+    });
+    group.Run(
+        [&] { paged.Occluded(std::span(segs).subspan(half), std::span(tasks).subspan(half)); });
+    group.Wait();
+    EXPECT_EQ(serial, tasks);
+}
+
+TEST(PagedVisibility, ResidentPiecesStayUnderTheCache) {
+    const auto geoms = Scene();
+    const std::vector<Segment> segs = Segments(5000, 4);
+    PagingOptions po;
+    po.piece_triangles = 1000;
+    po.cache_bytes = 2 * 1000 * kPieceBytesPerTriangle;
+    VisibilityScene paged;
+    paged.EnablePaging(po);
+    Fill(&paged, geoms);
+    const int64_t before = EmbreeMemoryBytes();
+    std::vector<uint8_t> occ(segs.size());
+    int64_t most = 0;
+    for (size_t lo = 0; lo < segs.size(); lo += 250) {
+        paged.Occluded(std::span(segs).subspan(lo, 250), std::span(occ).subspan(lo, 250));
+        most = std::max(most, EmbreeMemoryBytes() - before);
+    }
+    const PagingStats st = paged.paged()->stats();
+    ASSERT_GT(st.pieces, 4u);
+    // Two resident pieces and the one being built, at Embree's real cost per triangle.
+    std::printf("Embree bytes beyond the start: at most %lld (cache %llu)\n", (long long)most,
+                (unsigned long long)po.cache_bytes);
+    EXPECT_LE(most, int64_t(3 * 1000 * kPieceBytesPerTriangle));
+}
+
+}  // namespace
+}  // namespace mebake::solve
