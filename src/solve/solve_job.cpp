@@ -20,6 +20,7 @@
 #include "solve/solution.h"
 #include "solve/visibility.h"
 #include "stream/bake_dir.h"
+#include "stream/proxy_cluster.h"
 #include "stream/tile.h"
 
 #include <algorithm>
@@ -44,17 +45,16 @@ namespace {
 // direct light); larger ones shoot their emission through the solver.
 constexpr size_t kMaxEmissiveTriangles = 256;
 
-// Pages the visibility mesh when its Embree scene (estimated as ingest sizes it) would exceed
-// half the Embree cap, the other half leaving room for the build's peak; or when forced.
-// Resident pieces take a quarter of the cap, pieces a quarter of that each: Embree stays
-// well under its cap with a piece pinned per thread and one being built, and the solve's
-// peak RSS under --memory (16M sphere at 128M: 104 MiB; with half the cap resident, 136).
+// Pages the visibility mesh when VisibilityIsPaged says so, or when forced. Resident pieces
+// take a quarter of the cap, pieces a quarter of that each: Embree stays well under its cap
+// with a piece pinned per thread and one being built, and the solve's peak RSS under
+// --memory (16M sphere at 128M: 104 MiB; with half the cap resident, 136).
 void ConfigurePaging(const SolveJobOptions& opt, const stream::Manifest& m,
                      const MemoryBudget& budget, VisibilityScene& vis) {
     const uint64_t share = budget.EmbreeLimit() / 2;
-    const uint64_t scene_bytes = m.proxy_triangles * kPieceBytesPerTriangle;
-    if (opt.paged_visibility == 0 && scene_bytes <= share)
+    if (opt.paged_visibility == 0 && !VisibilityIsPaged(m, budget))
         return;
+    const uint64_t scene_bytes = m.proxy_triangles * kPieceBytesPerTriangle;
     PagingOptions po;
     po.cache_bytes = opt.paged_cache > 0 ? opt.paged_cache : share / 2;
     po.piece_triangles = opt.paged_visibility > 0
@@ -566,6 +566,12 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
         spdlog::info("{} checkpoints of {} took {}", checkpoints.count,
                      FormatBytes(checkpoints.bytes), FormatSeconds(checkpoints.seconds));
     return st;
+}
+
+bool VisibilityIsPaged(const stream::Manifest& m, const MemoryBudget& budget) {
+    const uint64_t per_triangle = m.proxy_cell_size > 0 ? stream::kEmbreeBytesPerProxyTriangle
+                                                        : stream::kEmbreeBytesPerTriangle;
+    return m.proxy_triangles * per_triangle > budget.EmbreeLimit() / 2;
 }
 
 }  // namespace mebake::solve

@@ -7,7 +7,9 @@
 // settings (docs/resume.md).
 #pragma once
 
+#include "core/memory_budget.h"
 #include "solve/solver.h"
+#include "stream/bake_dir.h"
 
 #include <string>
 
@@ -37,5 +39,11 @@ struct SolveJobOptions {
 };
 
 SolveStats RunSolveJob(const SolveJobOptions& opt);
+
+// Whether the solve traces this directory's visibility mesh in pieces at this budget
+// (unless forced): its Embree scene, estimated as ingest sized it (56 B per triangle of the
+// full mesh, 100 B of a clustered proxy), over half the budget's Embree cap. Ingest fits
+// the scene to the 64 MiB visibility share, so from --memory 256M up it never is.
+bool VisibilityIsPaged(const stream::Manifest& m, const MemoryBudget& budget);
 
 }  // namespace mebake::solve

@@ -4,6 +4,7 @@
 
 #include "core/parallel.h"
 #include "core/vec.h"
+#include "solve/solve_job.h"
 #include "solve/visibility.h"
 
 #include <gtest/gtest.h>
@@ -205,6 +206,24 @@ TEST(PagedVisibility, ResidentPiecesStayUnderTheCache) {
     std::printf("Embree bytes beyond the start: at most %lld (cache %llu)\n", (long long)most,
                 (unsigned long long)po.cache_bytes);
     EXPECT_LE(most, int64_t(3 * 1000 * kPieceBytesPerTriangle));
+}
+
+// Paged only where the scene cannot fit: ingest sizes the visibility mesh to the 64 MiB
+// share (full mesh at 56 B per triangle, clustered proxy at 100 B), which fits the Embree
+// cap from --memory 256M up. A 1M-triangle full mesh at the default budget must not be
+// paged (the paged path costs 3x the CPU; a 100 B estimate for it paged the 1M rock).
+TEST(PagedVisibilityChoice, OnlyWhenTheSceneExceedsHalfTheEmbreeCap) {
+    constexpr uint64_t MiB = uint64_t(1) << 20;
+    stream::Manifest full;
+    full.proxy_triangles = 1'000'000;  // the full mesh (no clustering cell)
+    EXPECT_FALSE(VisibilityIsPaged(full, MemoryBudget(1024 * MiB)));
+    EXPECT_FALSE(VisibilityIsPaged(full, MemoryBudget(256 * MiB)));
+    EXPECT_TRUE(VisibilityIsPaged(full, MemoryBudget(128 * MiB)));
+    stream::Manifest proxy;
+    proxy.proxy_triangles = 670'000;  // the largest proxy ingest makes
+    proxy.proxy_cell_size = 0.01;
+    EXPECT_FALSE(VisibilityIsPaged(proxy, MemoryBudget(256 * MiB)));
+    EXPECT_TRUE(VisibilityIsPaged(proxy, MemoryBudget(128 * MiB)));
 }
 
 }  // namespace
