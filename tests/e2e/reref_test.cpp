@@ -65,7 +65,7 @@ TEST(Reref, PointsLandOnTheSameSurfacePointsInAnotherIngest) {
     for (const auto& p : after["points"]) {
         char name[32];
         std::snprintf(name, sizeof(name), "c%06u.tile", p["chart"].get<unsigned>());
-        const io::ChunkReader tile((dir / "b.mebake" / "tiles" / name).string(), io::Tag("TILE"), 1, 1);
+        const io::ChunkReader tile((dir / "b.mebake" / "tiles" / name).string(), io::Tag("TILE"), 1, 2);  // tile format 2 (stream/tile.h)
         const auto pos = tile.ReadArray<float>(io::Tag("VPOS"));
         const auto tris = tile.ReadArray<uint32_t>(io::Tag("TRIS"));
         const size_t t = p["triangle"].get<size_t>();
