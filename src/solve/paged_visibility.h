@@ -22,6 +22,7 @@
 #pragma once
 
 #include "solve/visibility.h"
+#include "stream/proxy_cluster.h"
 #include "stream/tile_octree.h"
 
 #include <atomic>
@@ -39,9 +40,9 @@ struct PagingOptions {
     uint32_t piece_triangles = 65536;           // at most this many triangles per piece
 };
 
-// Embree bytes per triangle used to size pieces and the cache: the ingest's figure for a
-// clustered proxy (docs/file-formats.md, 88-101 measured), above the full mesh's 55.
-inline constexpr uint64_t kPieceBytesPerTriangle = 100;
+// Embree bytes per triangle used to size pieces and the cache: ingest's figure for a
+// clustered proxy (stream/proxy_cluster.h), above the full mesh's, so either fits.
+inline constexpr uint64_t kPieceBytesPerTriangle = stream::kEmbreeBytesPerProxyTriangle;
 
 struct PagingStats {
     uint64_t pieces = 0, largest_piece = 0;  // triangles in the largest piece

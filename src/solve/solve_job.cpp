@@ -45,6 +45,13 @@ namespace {
 // direct light); larger ones shoot their emission through the solver.
 constexpr size_t kMaxEmissiveTriangles = 256;
 
+// The visibility mesh's Embree scene as ingest sized it: 56 B per triangle of the full
+// mesh, 100 B of a clustered proxy (stream/proxy_cluster.h).
+uint64_t VisibilitySceneBytes(const stream::Manifest& m) {
+    return m.proxy_triangles * (m.proxy_cell_size > 0 ? stream::kEmbreeBytesPerProxyTriangle
+                                                      : stream::kEmbreeBytesPerTriangle);
+}
+
 // Pages the visibility mesh when VisibilityIsPaged says so, or when forced. Resident pieces
 // take a quarter of the cap, pieces a quarter of that each: Embree stays well under its cap
 // with a piece pinned per thread and one being built, and the solve's peak RSS under
@@ -54,7 +61,7 @@ void ConfigurePaging(const SolveJobOptions& opt, const stream::Manifest& m,
     const uint64_t share = budget.EmbreeLimit() / 2;
     if (opt.paged_visibility == 0 && !VisibilityIsPaged(m, budget))
         return;
-    const uint64_t scene_bytes = m.proxy_triangles * kPieceBytesPerTriangle;
+    const uint64_t scene_bytes = VisibilitySceneBytes(m);
     PagingOptions po;
     po.cache_bytes = opt.paged_cache > 0 ? opt.paged_cache : share / 2;
     po.piece_triangles = opt.paged_visibility > 0
@@ -569,9 +576,7 @@ SolveStats RunSolveJob(const SolveJobOptions& opt) {
 }
 
 bool VisibilityIsPaged(const stream::Manifest& m, const MemoryBudget& budget) {
-    const uint64_t per_triangle = m.proxy_cell_size > 0 ? stream::kEmbreeBytesPerProxyTriangle
-                                                        : stream::kEmbreeBytesPerTriangle;
-    return m.proxy_triangles * per_triangle > budget.EmbreeLimit() / 2;
+    return VisibilitySceneBytes(m) > budget.EmbreeLimit() / 2;
 }
 
 }  // namespace mebake::solve
