@@ -164,6 +164,7 @@ public:
         discs_ = discs;
         const uint32_t nf = s_.face_count();
         chart.assign(nf, kNoIndex);
+        best_.assign(discs_ ? 0 : nf, Best{});
         weight_ = float(compactness_ * kPi * double(std::max<size_t>(proxies.size(), 1)) /
                         std::max(s_.total_area, 1e-30));
         for (uint32_t p = 0; p < proxies.size(); ++p) {
@@ -230,12 +231,29 @@ private:
         }
     };
 
+    // Without the disc rule the first entry of a face to leave the heap takes it, so an
+    // entry that orders after one already queued for the same face could never take it:
+    // it is not pushed (same partition, a third of the heap's work on scans).
+    struct Best {
+        float cost = std::numeric_limits<float>::infinity();
+        uint32_t proxy = kNoIndex;
+    };
+
     void PushNeighbours(uint32_t f, uint32_t p, const Proxy& proxy,
                         const std::vector<uint32_t>& chart) {
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t g = s_.Neighbour(f, k);
-            if (g != kNoIndex && chart[g] == kNoIndex && !s_.degenerate[g] && !s_.crease[3 * f + k])
-                heap_.push({Cost(g, proxy), g, p});
+            if (g == kNoIndex || chart[g] != kNoIndex || s_.degenerate[g] || s_.crease[3 * f + k])
+                continue;
+            const float cost = Cost(g, proxy);
+            if (!discs_) {
+                Best& b = best_[g];
+                if (cost > b.cost || (cost == b.cost && p >= b.proxy))
+                    continue;
+                if (!std::isnan(cost))  // a NaN orders nowhere: queued, never a bound
+                    b = {cost, p};
+            }
+            heap_.push({cost, g, p});
         }
     }
 
@@ -257,6 +275,7 @@ private:
     float weight_ = 0;  // compactness / R^2
     size_t leftovers_ = 0;
     bool discs_ = true;
+    std::vector<Best> best_;  // per face, the best entry queued (without the disc rule)
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
 };
 
