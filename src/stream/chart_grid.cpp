@@ -58,16 +58,9 @@ struct Closest {
     Vec2d point;
 };
 
-// Closest point of triangle t to u (u itself when inside), with its barycentrics.
-Closest ClosestPoint(const Tri2& t, const Vec2d& u) {
+// Closest point of the edges of triangle t to u, with its barycentrics.
+Closest ClosestOnEdges(const Tri2& t, const Vec2d& u) {
     Closest c;
-    double b[3];
-    if (Barycentric(t, u, b) && b[0] >= 0 && b[1] >= 0 && b[2] >= 0) {
-        c.dist2 = 0;
-        std::copy(b, b + 3, c.b);
-        c.point = u;
-        return c;
-    }
     for (int k = 0; k < 3; ++k) {
         const Vec2d& a = t.p[k];
         const Vec2d e = t.p[(k + 1) % 3] - a;
@@ -84,6 +77,19 @@ Closest ClosestPoint(const Tri2& t, const Vec2d& u) {
         }
     }
     return c;
+}
+
+// Closest point of triangle t to u (u itself when inside), with its barycentrics.
+Closest ClosestPoint(const Tri2& t, const Vec2d& u) {
+    double b[3];
+    if (Barycentric(t, u, b) && b[0] >= 0 && b[1] >= 0 && b[2] >= 0) {
+        Closest c;
+        c.dist2 = 0;
+        std::copy(b, b + 3, c.b);
+        c.point = u;
+        return c;
+    }
+    return ClosestOnEdges(t, u);
 }
 
 struct Box {
@@ -131,14 +137,16 @@ bool Overlaps(const Tri2& t, const Box& b) {
 }
 
 // Distance between a box and a triangle: 0 if they overlap, else attained at a vertex of
-// one of the two convex polygons.
+// one of the two convex polygons. Apart, no corner lies inside the triangle, so a corner's
+// distance is to the triangle's edges (where rounding would put a corner inside, both are
+// ~1e-32, far below any bound the grid compares them with).
 double TriBoxDist2(const Tri2& t, const Box& b) {
     if (Overlaps(t, b))
         return 0;
     double d2 = INFINITY;
     const Vec2d corners[4] = {b.lo, {b.hi.x, b.lo.y}, b.hi, {b.lo.x, b.hi.y}};
     for (const Vec2d& c : corners)
-        d2 = std::min(d2, ClosestPoint(t, c).dist2);
+        d2 = std::min(d2, ClosestOnEdges(t, c).dist2);
     for (const Vec2d& p : t.p)
         d2 = std::min(d2, PointBoxDist2(p, b));
     return d2;

@@ -68,9 +68,13 @@ struct Surface {
     std::vector<uint8_t> degenerate;  // repeated index: a chart of its own
     std::vector<uint8_t> crease;      // per half-edge: the two faces fold by > kCreaseDeg
     double total_area = 0;
-    // Normal and centroid in one cache line's reach for the partition's hot loop.
+    // What the partition's hot loop reads of a face, in one cache line's reach (it visits
+    // faces in heap order, so each face costs a cache miss per array it reads): normal,
+    // centroid, and the neighbour across each edge a chart may grow to (kNoIndex at a
+    // boundary, a crease or a degenerate neighbour).
     struct Packed {
         Vec3f normal, centroid;
+        uint32_t grow[3];
     };
     std::vector<Packed> packed;
 
@@ -107,8 +111,14 @@ struct Surface {
             crease[h] = twin[h] != kNoIndex && Dot(normal[h / 3], normal[twin[h] / 3]) < crease_cos;
         SmoothNormals();
         packed.resize(nf);
-        for (size_t f = 0; f < nf; ++f)
-            packed[f] = {Vec3f(normal[f]), Vec3f(centroid[f])};
+        for (size_t f = 0; f < nf; ++f) {
+            packed[f] = {Vec3f(normal[f]), Vec3f(centroid[f]), {kNoIndex, kNoIndex, kNoIndex}};
+            for (uint32_t k = 0; k < 3; ++k) {
+                const uint32_t g = Neighbour(uint32_t(f), k);
+                if (g != kNoIndex && !degenerate[g] && !crease[3 * f + k])
+                    packed[f].grow[k] = g;
+            }
+        }
     }
 
     // Scanned surfaces carry noise at the scale of a face, which would read as curvature.
@@ -241,9 +251,8 @@ private:
 
     void PushNeighbours(uint32_t f, uint32_t p, const Proxy& proxy,
                         const std::vector<uint32_t>& chart) {
-        for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t g = s_.Neighbour(f, k);
-            if (g == kNoIndex || chart[g] != kNoIndex || s_.degenerate[g] || s_.crease[3 * f + k])
+        for (uint32_t g : s_.packed[f].grow) {
+            if (g == kNoIndex || chart[g] != kNoIndex)
                 continue;
             const float cost = Cost(g, proxy);
             if (!discs_) {
