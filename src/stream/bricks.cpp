@@ -300,11 +300,26 @@ TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
             m.albedo[i] = col[i].a ? Vec3f(col[i].r / 255.f, col[i].g / 255.f, col[i].b / 255.f)
                                    : Vec3f(-1, -1, -1);
     }
+    // Local index of a global id: a binary search inside one bucket of ids by their high
+    // bits (about one id per bucket) instead of over all of them, a cache miss per step.
+    const uint64_t lo = ids.empty() ? 0 : ids.front(), span = ids.empty() ? 0 : ids.back() - lo;
+    int shift = 0;
+    while ((span >> shift) >= std::max<size_t>(ids.size(), 1))
+        ++shift;
+    std::vector<uint32_t> bucket((span >> shift) + 2, 0);
+    for (uint64_t id : ids)
+        ++bucket[((id - lo) >> shift) + 1];
+    for (size_t b = 1; b < bucket.size(); ++b)
+        bucket[b] += bucket[b - 1];
     m.triangles.reserve(faces.size());
     for (const auto& f : faces) {
         std::array<uint32_t, 3> t;
-        for (int c = 0; c < 3; ++c)
-            t[size_t(c)] = uint32_t(std::lower_bound(ids.begin(), ids.end(), f.v[c]) - ids.begin());
+        for (int c = 0; c < 3; ++c) {
+            const uint64_t b = (f.v[c] - lo) >> shift;
+            t[size_t(c)] = uint32_t(std::lower_bound(ids.begin() + bucket[b],
+                                                     ids.begin() + bucket[b + 1], f.v[c]) -
+                                    ids.begin());
+        }
         m.triangles.push_back(t);
         m.face_id.push_back(f.face_id);
         m.material.push_back(f.material);
