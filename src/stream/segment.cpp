@@ -270,6 +270,10 @@ private:
         while (!heap_.empty()) {
             const Entry e = heap_.top();
             heap_.pop();
+            if (!heap_.empty()) {  // the next face's data is on its way while this one is done
+                __builtin_prefetch(&s_.packed[heap_.top().face]);
+                __builtin_prefetch(&chart[heap_.top().face]);
+            }
             if (chart[e.face] != kNoIndex)
                 continue;
             if (discs_ && !CanAdd(e.face, e.proxy, chart))
