@@ -136,20 +136,23 @@ bool Overlaps(const Tri2& t, const Box& b) {
     return true;
 }
 
-// Distance between a box and a triangle: 0 if they overlap, else attained at a vertex of
-// one of the two convex polygons. Apart, no corner lies inside the triangle, so a corner's
-// distance is to the triangle's edges (where rounding would put a corner inside, both are
-// ~1e-32, far below any bound the grid compares them with).
-double TriBoxDist2(const Tri2& t, const Box& b) {
+// Whether a triangle lies within sqrt(r2) of a box. Their distance is 0 if they overlap,
+// else the least of the triangle's vertices' distances to the box and the box's corners'
+// distances to the triangle, so any one of those within r2 decides: the cheap ones are
+// tried first. Apart, no corner lies inside the triangle, so a corner's distance is to the
+// triangle's edges (where rounding would put a corner inside, both are ~1e-32, far below
+// any bound the grid compares them with).
+bool TriBoxWithin(const Tri2& t, const Box& b, double r2) {
+    for (const Vec2d& p : t.p)
+        if (PointBoxDist2(p, b) <= r2)
+            return true;
     if (Overlaps(t, b))
-        return 0;
-    double d2 = INFINITY;
+        return true;
     const Vec2d corners[4] = {b.lo, {b.hi.x, b.lo.y}, b.hi, {b.lo.x, b.hi.y}};
     for (const Vec2d& c : corners)
-        d2 = std::min(d2, ClosestOnEdges(t, c).dist2);
-    for (const Vec2d& p : t.p)
-        d2 = std::min(d2, PointBoxDist2(p, b));
-    return d2;
+        if (ClosestOnEdges(t, c).dist2 <= r2)
+            return true;
+    return false;
 }
 
 // A bounding-volume hierarchy over the outline triangles, used at build time only.
@@ -221,7 +224,7 @@ public:
             if (node.count > 0) {
                 for (uint32_t i = node.first; i < node.first + node.count; ++i)
                     if (BoxBoxDist2(b, boxes_[prims_[i]]) <= r2 &&  // a lower bound, cheap
-                        TriBoxDist2(tris_[prims_[i]], b) <= r2)
+                        TriBoxWithin(tris_[prims_[i]], b, r2))
                         out->push_back(prims_[i]);
                 continue;
             }
