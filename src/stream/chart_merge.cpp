@@ -241,18 +241,23 @@ int HorizonCells(double scale, const MergeOptions& o) {
                     ChartResolution(scale, o.texel_size, o.min_resolution, o.max_resolution)));
 }
 
-Trial Try(const TriMesh& piece, const MergeOptions& o) {
+// `whole`: the flattening is wanted with its split tests even when the chart fails here
+// (a chart on its own: the builder splits it by them). A union that fails the cheaper
+// tests here is dropped, so its overlap test (ClassifyChart) is not made.
+Trial Try(const TriMesh& piece, const MergeOptions& o, bool whole) {
     Trial t;
     if (piece.vertex_count() > o.max_chart_vertices)
         return t;
-    t.param = ParameterizeChart(piece, o.param);
+    t.param = FlattenChart(piece, o.param);
     const ChartParam& p = t.param;
-    const bool ok = p.status == ParamStatus::kOk && p.metrics.flipped == 0 &&
-                    p.scale <= o.max_scale &&
+    const bool flat = p.status == ParamStatus::kOk;
+    const bool ok = flat && p.metrics.flipped == 0 && p.scale <= o.max_scale &&
                     p.metrics.jacobian_deviation_mean <= o.max_mean_deviation &&
                     CellSpread(piece, p.uv, 1 - p.metrics.virtual_fraction,
                                HorizonCells(p.scale, o)) <= o.max_cell_spread_deg;
-    if (ok)
+    if (flat && (ok || whole))
+        ClassifyChart(piece, o.param, &t.param);
+    if (ok && p.status == ParamStatus::kOk)
         t.square = p.scale * p.scale;
     return t;
 }
@@ -271,7 +276,7 @@ struct MergeState {
         thread_local std::vector<uint32_t> local_of;
         if (local_of.size() < mesh.vertex_count())
             local_of.assign(mesh.vertex_count(), kNoIndex);
-        return Try(Union(mesh, fa, fb, local_of), options);
+        return Try(Union(mesh, fa, fb, local_of), options, /*whole=*/fb.empty());
     }
 
     // A matching from the ranked borders: each chart in at most one pair, pairs that cannot

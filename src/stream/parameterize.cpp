@@ -451,6 +451,13 @@ bool Flatten(const TriMesh& chart, std::span<const FlatTriangle> flat,
 }  // namespace
 
 ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) {
+    ChartParam out = FlattenChart(chart, options);
+    if (out.status == ParamStatus::kOk)
+        ClassifyChart(chart, options, &out);
+    return out;
+}
+
+ChartParam FlattenChart(const TriMesh& chart, const ParamOptions& options) {
     ChartParam out;
     const uint32_t vertex_count = uint32_t(chart.vertex_count());
     if (chart.vertex_count() > kNone) {
@@ -498,7 +505,13 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
     for (uint32_t v = 0; v < vertex_count; ++v)
         final_uv[v] = Vec2d(out.uv[v].x, out.uv[v].y);
     out.metrics.flipped = CountFlips(final_uv, chart.triangles);
+    out.status = ParamStatus::kOk;
+    return out;
+}
 
+void ClassifyChart(const TriMesh& chart, const ParamOptions& options, ChartParam* param) {
+    CHECK(param->status == ParamStatus::kOk);
+    ChartParam& out = *param;
     if (out.metrics.flipped > 0) {
         out.status = ParamStatus::kFlipped;
         out.message = fmt::format("{} flipped uv triangles", out.metrics.flipped);
@@ -512,10 +525,7 @@ ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options) 
         out.message =
             fmt::format("coarse Jacobian deviation {:.4f} > {:.4f}",
                         out.metrics.jacobian_deviation_coarse, options.max_jacobian_deviation);
-    } else {
-        out.status = ParamStatus::kOk;
     }
-    return out;
 }
 
 }  // namespace mebake::stream

@@ -143,7 +143,15 @@ void MeasureDistortion(std::span<const Vec3f> position,
                        std::span<const std::array<uint32_t, 3>> triangles,
                        std::span<const Vec2f> uv, ChartParam* out);
 
-// The whole pipeline. Deterministic: the same input gives the same bytes.
+// The whole pipeline: FlattenChart, then ClassifyChart when a map was computed.
+// Deterministic: the same input gives the same bytes.
 ChartParam ParameterizeChart(const TriMesh& chart, const ParamOptions& options = {});
+
+// Its two halves, for a caller with tests of its own to make before the costlier split
+// tests (chart_merge.cpp). FlattenChart computes uv, scale, area ratios and metrics
+// (flipped included) and leaves status kOk, or returns the reason there is no map;
+// ClassifyChart then sets kFlipped, kOverlap or kDistorted where the chart must be split.
+ChartParam FlattenChart(const TriMesh& chart, const ParamOptions& options = {});
+void ClassifyChart(const TriMesh& chart, const ParamOptions& options, ChartParam* param);
 
 }  // namespace mebake::stream
