@@ -66,7 +66,6 @@ struct Surface {
     std::vector<uint32_t> twin;
     VertexFaces vf;
     std::vector<uint8_t> degenerate;  // repeated index: a chart of its own
-    std::vector<uint8_t> crease;      // per half-edge: the two faces fold by > kCreaseDeg
     double total_area = 0;
     // What the partition's hot loop reads of a face, in one cache line's reach (it visits
     // faces in heap order, so each face costs a cache miss per array it reads): normal,
@@ -105,19 +104,19 @@ struct Surface {
         twin = BuildTwins(tris, BuildEdgeGroups(tris));
         vf = BuildVertexFaces(tris, vertex_count);
         // Folds are read off the raw normals, before smoothing blurs a box's edges away.
-        crease.assign(3 * nf, 0);
         const double crease_cos = std::cos(kCreaseDeg * kPi / 180);
-        for (size_t h = 0; h < 3 * nf; ++h)
-            crease[h] = twin[h] != kNoIndex && Dot(normal[h / 3], normal[twin[h] / 3]) < crease_cos;
-        SmoothNormals();
         packed.resize(nf);
         for (size_t f = 0; f < nf; ++f) {
-            packed[f] = {Vec3f(normal[f]), Vec3f(centroid[f]), {kNoIndex, kNoIndex, kNoIndex}};
             for (uint32_t k = 0; k < 3; ++k) {
                 const uint32_t g = Neighbour(uint32_t(f), k);
-                if (g != kNoIndex && !degenerate[g] && !crease[3 * f + k])
-                    packed[f].grow[k] = g;
+                const bool crease = g != kNoIndex && Dot(normal[f], normal[g]) < crease_cos;
+                packed[f].grow[k] = g != kNoIndex && !degenerate[g] && !crease ? g : kNoIndex;
             }
+        }
+        SmoothNormals();
+        for (size_t f = 0; f < nf; ++f) {
+            packed[f].normal = Vec3f(normal[f]);
+            packed[f].centroid = Vec3f(centroid[f]);
         }
     }
 
@@ -174,7 +173,7 @@ public:
         discs_ = discs;
         const uint32_t nf = s_.face_count();
         chart.assign(nf, kNoIndex);
-        best_.assign(discs_ ? 0 : nf, Best{});
+        best_.assign(discs_ ? 0 : nf, std::numeric_limits<float>::infinity());
         weight_ = float(compactness_ * kPi * double(std::max<size_t>(proxies.size(), 1)) /
                         std::max(s_.total_area, 1e-30));
         for (uint32_t p = 0; p < proxies.size(); ++p) {
@@ -242,13 +241,8 @@ private:
     };
 
     // Without the disc rule the first entry of a face to leave the heap takes it, so an
-    // entry that orders after one already queued for the same face could never take it:
-    // it is not pushed (same partition, a third of the heap's work on scans).
-    struct Best {
-        float cost = std::numeric_limits<float>::infinity();
-        uint32_t proxy = kNoIndex;
-    };
-
+    // entry costlier than one already queued for the same face could never take it: it is
+    // not pushed (same partition, a third of the heap's work on scans).
     void PushNeighbours(uint32_t f, uint32_t p, const Proxy& proxy,
                         const std::vector<uint32_t>& chart) {
         for (uint32_t g : s_.packed[f].grow) {
@@ -256,11 +250,10 @@ private:
                 continue;
             const float cost = Cost(g, proxy);
             if (!discs_) {
-                Best& b = best_[g];
-                if (cost > b.cost || (cost == b.cost && p >= b.proxy))
+                if (cost > best_[g])
                     continue;
-                if (!std::isnan(cost))  // a NaN orders nowhere: queued, never a bound
-                    b = {cost, p};
+                if (cost < best_[g])  // a NaN orders nowhere: queued, never a bound
+                    best_[g] = cost;
             }
             heap_.push({cost, g, p});
         }
@@ -288,7 +281,7 @@ private:
     float weight_ = 0;  // compactness / R^2
     size_t leftovers_ = 0;
     bool discs_ = true;
-    std::vector<Best> best_;  // per face, the best entry queued (without the disc rule)
+    std::vector<float> best_;  // per face, the least cost queued (without the disc rule)
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
 };
 
