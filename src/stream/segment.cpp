@@ -242,7 +242,7 @@ private:
 
     // Without the disc rule the first entry of a face to leave the heap takes it, so an
     // entry costlier than one already queued for the same face could never take it: it is
-    // not pushed (same partition, a third of the heap's work on scans).
+    // not pushed (same partition, fewer heap operations).
     void PushNeighbours(uint32_t f, uint32_t p, const Proxy& proxy,
                         const std::vector<uint32_t>& chart) {
         for (uint32_t g : s_.packed[f].grow) {
