@@ -334,8 +334,7 @@ public:
             // wrong answer could cost no more than the allowance (SplitVisibility).
             int8_t vis = lk.vis;
             if (vis == kVisUnknown && s_.opt_.split_probes && tolerance_.enabled())
-                vis = SplitVisibility(lk, em, std::min(top, lk.level + 1),
-                                      b / tolerance_.allowed(lk.node));
+                vis = SplitVisibility(lk, em, top, b / tolerance_.allowed(lk.node));
             if (vis == kHidden)
                 continue;
             const bool split_receiver = recv_can && (!emit_can || size_r >= size_e);
@@ -567,18 +566,26 @@ private:
         pts_node_ = n;
     }
 
-    // The visibility of a link about to be split, for its whole subtree: stratified probes
-    // between the node's Gauss points and the region's texels at level ls that face each
-    // other (as TraceLink's: at most link_probes, at most half the pairs). All blocked: no
-    // link below it can carry light, and the subtree is dropped; all free: its links are
-    // evaluated as wholly visible, without rays; otherwise each link below traces its own.
-    // Smits' error estimate decides whether to try: the link's bound (link_refine.h) times
-    // the visibility uncertainty that k agreeing probes leave, taken as 1 / k, must be
-    // within the allowance (`ratio` = bound / allowance <= k); a wrong answer then errs by
-    // at most k allowances, on 1 / k of the subtree's pairs if the probes are a fair sample.
-    int8_t SplitVisibility(const Link& lk, const Emitter& em, int ls, double ratio) {
-        if (ratio > s_.opt_.link_probes)
+    // The visibility of a link about to be split, for its whole subtree: k stratified probes
+    // between the node's Gauss points and the region's texels that face each other (as
+    // TraceLink's, at most half the pairs; the texels one level below the region, or finer
+    // when that gives too few pairs). All blocked: no link below it can carry light, and
+    // the subtree is dropped; all free: its links are evaluated as wholly visible, without
+    // rays; otherwise each link below traces its own. Smits' error estimate sets k: the
+    // link's bound (link_refine.h) times the visibility uncertainty that k agreeing probes
+    // leave, taken as 1 / k, must be within the allowance (k >= `ratio` = bound /
+    // allowance); a wrong answer errs by at most `ratio` allowances, on about 1 / k of the
+    // subtree's pairs when the probes are a fair sample.
+    int8_t SplitVisibility(const Link& lk, const Emitter& em, int top, double ratio) {
+        // k = the bound's ratio, at least link_probes, at most 4 x link_probes: the rays of
+        // one 36-pair link traced in full.
+        const int k0 = s_.opt_.link_probes;
+        if (k0 < 2 || ratio > 4.0 * k0)
             return kVisUnknown;
+        const size_t want = size_t(std::max(double(k0), std::ceil(ratio)));
+        int ls = std::min(top, lk.level + 1);
+        while (ls < top && size_t(ng_ * ng_) << (2 * (ls - lk.level)) < 2 * want)
+            ++ls;
         NodePoints(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
@@ -596,7 +603,7 @@ private:
                 }
         }
         const size_t n = batch_.size();
-        const size_t probes = std::min(size_t(std::max(0, s_.opt_.link_probes)), n / 2);
+        const size_t probes = std::min(want, n / 2);
         if (probes < 2 || ratio > double(probes))
             return kVisUnknown;
         probe_.Clear();
