@@ -513,20 +513,14 @@ private:
             batch_.Trace(s_.vis_, RayKind::kLink);
             return;
         }
-        // Probe k is pair (2k + 1) n / (2 probes): increasing, and distinct as n >= 2 probes.
-        auto probe_pair = [&](size_t k) { return (2 * k + 1) * n / (2 * probes); };
-        probe_.Clear();
-        for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(batch_.segments[probe_pair(k)]);
-        probe_.Trace(s_.vis_, RayKind::kLink);
-        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
+        const size_t hidden = TraceProbes(probes);
         if (hidden == 0 || hidden == probes) {
             batch_.occluded.assign(n, hidden == 0 ? 0 : 1);
             return;
         }
         rest_.Clear();
         for (size_t q = 0, k = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
+            if (k < probes && q == ProbePair(k, n, probes))
                 ++k;
             else
                 rest_.segments.push_back(batch_.segments[q]);
@@ -534,7 +528,7 @@ private:
         rest_.Trace(s_.vis_, RayKind::kLink);
         batch_.occluded.resize(n);
         for (size_t q = 0, k = 0, r = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
+            if (k < probes && q == ProbePair(k, n, probes))
                 batch_.occluded[q] = probe_.occluded[k++];
             else
                 batch_.occluded[q] = rest_.occluded[r++];
@@ -606,12 +600,21 @@ private:
         const size_t probes = std::min(want, n / 2);
         if (probes < 2 || ratio > double(probes))
             return kVisUnknown;
+        const size_t hidden = TraceProbes(probes);
+        return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
+    }
+
+    // Probe k is segment ProbePair(k) of batch_'s n: increasing, and distinct as n >= 2
+    // probes. Traces them into probe_ and returns how many are blocked.
+    static size_t ProbePair(size_t k, size_t n, size_t probes) {
+        return (2 * k + 1) * n / (2 * probes);
+    }
+    size_t TraceProbes(size_t probes) {
         probe_.Clear();
         for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(batch_.segments[(2 * k + 1) * n / (2 * probes)]);
+            probe_.segments.push_back(batch_.segments[ProbePair(k, batch_.size(), probes)]);
         probe_.Trace(s_.vis_, RayKind::kLink);
-        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
-        return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
+        return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
