@@ -106,6 +106,7 @@ public:
     bool Accepts(size_t node, double bound) const {
         return enabled() && bound <= double(allowed_[node]);
     }
+    double allowed(size_t node) const { return allowed_[node]; }
 
 private:
     std::vector<float> allowed_;

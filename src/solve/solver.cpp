@@ -283,7 +283,7 @@ public:
     // in place of one ray per pair.
     void ShootCluster(const Emitter& em, float vis) {
         const int top = int(em.levels.size()) - 1;
-        EvaluateLink(0, em, Link{0, 0, 0, 0}, std::min(top, 1), vis);
+        EvaluateLink(0, em, Link{0, 0, 0, 0, kVisUnknown}, std::min(top, 1), vis);
     }
 
     // A pair (receiver node, emitter region) is evaluated when both are small against
@@ -292,7 +292,7 @@ public:
     // larger side is subdivided.
     void Shoot(const Emitter& em) {
         const int top = int(em.levels.size()) - 1;
-        std::vector<Link> stack(1, Link{0, 0, 0, 0});
+        std::vector<Link> stack(1, Link{0, 0, 0, 0, kVisUnknown});
         while (!stack.empty()) {
             const Link lk = stack.back();
             stack.pop_back();
@@ -316,9 +316,10 @@ public:
             // from splitting: the samples' size bounds the link's accuracy.
             const bool emitter_bound = !emit_can && size_r <= size_e;
             bool accept = small || bound < negligible_ || (!recv_can && !emit_can) || emitter_bound;
+            double b = 1e300;
             if (!accept && tolerance_.enabled()) {
                 // The error-driven stop, with the cosines at both ends (link_refine.h).
-                const double b = Bound(lk.node, et);
+                b = Bound(lk.node, et);
                 if (b <= 0)
                     continue;  // the sides face away: no light can pass
                 accept = tolerance_.Accepts(lk.node, b);
@@ -326,26 +327,37 @@ public:
             if (accept) {
                 // Sample the region one level finer than itself when possible.
                 const int ls = std::min(top, lk.level + (dist > 0 ? 1 : top));
-                EvaluateLink(lk.node, em, lk, ls);
+                EvaluateLink(lk.node, em, lk, ls, lk.vis == kVisible ? 1.f : -1.f);
                 continue;
             }
+            // A split whose probes agree hands their answer to its whole subtree when a
+            // wrong answer could cost no more than the allowance (SplitVisibility).
+            int8_t vis = lk.vis;
+            if (vis == kVisUnknown && s_.opt_.split_probes && tolerance_.enabled())
+                vis = SplitVisibility(lk, em, top, b / tolerance_.allowed(lk.node));
+            if (vis == kHidden)
+                continue;
             const bool split_receiver = recv_can && (!emit_can || size_r >= size_e);
             if (split_receiver) {
                 for (int c = 3; c >= 0; --c)
-                    stack.push_back(Link{uint32_t(node.first_child + c), lk.level, lk.i, lk.j});
+                    stack.push_back(
+                        Link{uint32_t(node.first_child + c), lk.level, lk.i, lk.j, vis});
             } else {
                 for (int c = 3; c >= 0; --c)
                     stack.push_back(Link{lk.node, lk.level + 1, lk.i * 2 + uint32_t(c & 1),
-                                         lk.j * 2 + uint32_t(c >> 1)});
+                                         lk.j * 2 + uint32_t(c >> 1), vis});
             }
         }
     }
 
 private:
+    // A link's visibility as far as the refinement knows it (SplitVisibility).
+    static constexpr int8_t kVisUnknown = -1, kHidden = 0, kVisible = 1;
     struct Link {
         uint32_t node;  // receiver node
         int level;      // emitter region (level, i, j)
         uint32_t i, j;
+        int8_t vis;     // kVisUnknown, or what a split above it found for its whole subtree
     };
     struct Pair {
         uint32_t point;
@@ -431,10 +443,7 @@ private:
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
     // pair; otherwise every pair is weighted by vis (a cluster link's estimate).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
-        if (n != pts_node_) {  // the same node's points serve every emitter
-            s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
-            pts_node_ = n;
-        }
+        NodePoints(n);
         const auto& texels = em.levels[size_t(ls)];
         CollectPairs(texels, lk, ls, em.scale, vis < 0);
         if (pairs_.empty())
@@ -504,20 +513,14 @@ private:
             batch_.Trace(s_.vis_, RayKind::kLink);
             return;
         }
-        // Probe k is pair (2k + 1) n / (2 probes): increasing, and distinct as n >= 2 probes.
-        auto probe_pair = [&](size_t k) { return (2 * k + 1) * n / (2 * probes); };
-        probe_.Clear();
-        for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(batch_.segments[probe_pair(k)]);
-        probe_.Trace(s_.vis_, RayKind::kLink);
-        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
+        const size_t hidden = TraceProbes(probes);
         if (hidden == 0 || hidden == probes) {
             batch_.occluded.assign(n, hidden == 0 ? 0 : 1);
             return;
         }
         rest_.Clear();
         for (size_t q = 0, k = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
+            if (k < probes && q == ProbePair(k, n, probes))
                 ++k;
             else
                 rest_.segments.push_back(batch_.segments[q]);
@@ -525,11 +528,93 @@ private:
         rest_.Trace(s_.vis_, RayKind::kLink);
         batch_.occluded.resize(n);
         for (size_t q = 0, k = 0, r = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
+            if (k < probes && q == ProbePair(k, n, probes))
                 batch_.occluded[q] = probe_.occluded[k++];
             else
                 batch_.occluded[q] = rest_.occluded[r++];
         }
+    }
+
+    // Node n's Gauss points and albedo into pts_ and albedo_. The refinement comes back to
+    // a node for every emitter and between its regions' subtrees, so the points of the
+    // last kPointSlots nodes seen are kept (slot n mod kPointSlots: the same values
+    // whatever was evicted, so the same result).
+    void NodePoints(size_t n) {
+        if (n == pts_node_)
+            return;
+        const size_t per = size_t(ng_ * ng_), slot = n % kPointSlots;
+        if (point_slot_node_.empty()) {
+            point_slot_node_.assign(kPointSlots, SIZE_MAX);
+            point_cache_.resize(kPointSlots * per);
+            albedo_cache_.resize(kPointSlots * per);
+        }
+        if (point_slot_node_[slot] == n) {
+            pts_.assign(&point_cache_[slot * per], &point_cache_[slot * per] + per);
+            albedo_.assign(&albedo_cache_[slot * per], &albedo_cache_[slot * per] + per);
+        } else {
+            s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+            std::copy(pts_.begin(), pts_.end(), &point_cache_[slot * per]);
+            std::copy(albedo_.begin(), albedo_.end(), &albedo_cache_[slot * per]);
+            point_slot_node_[slot] = n;
+        }
+        pts_node_ = n;
+    }
+
+    // The visibility of a link about to be split, for its whole subtree: k stratified probes
+    // between the node's Gauss points and the region's texels that face each other (as
+    // TraceLink's, at most half the pairs; the texels one level below the region, or finer
+    // when that gives too few pairs). All blocked: no link below it can carry light, and
+    // the subtree is dropped; all free: its links are evaluated as wholly visible, without
+    // rays; otherwise each link below traces its own. Smits' error estimate sets k: the
+    // link's bound (link_refine.h) times the visibility uncertainty that k agreeing probes
+    // leave, taken as 1 / k, must be within the allowance (k >= `ratio` = bound /
+    // allowance); a wrong answer errs by at most `ratio` allowances, on about 1 / k of the
+    // subtree's pairs when the probes are a fair sample.
+    int8_t SplitVisibility(const Link& lk, const Emitter& em, int top, double ratio) {
+        // k = the bound's ratio, at least link_probes, at most 4 x link_probes: the rays of
+        // one 36-pair link traced in full.
+        const int k0 = s_.opt_.link_probes;
+        if (k0 < 2 || ratio > 4.0 * k0)
+            return kVisUnknown;
+        const size_t want = size_t(std::max(double(k0), std::ceil(ratio)));
+        int ls = std::min(top, lk.level + 1);
+        while (ls < top && size_t(ng_ * ng_) << (2 * (ls - lk.level)) < 2 * want)
+            ++ls;
+        NodePoints(lk.node);
+        const auto& texels = em.levels[size_t(ls)];
+        const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
+        batch_.Clear();
+        for (const ReceiverPoint& rp : pts_) {
+            const Vec3f org = rp.vis_point + rp.normal * eps_;
+            for (uint32_t b = 0; b < span; ++b)
+                for (uint32_t a = 0; a < span; ++a) {
+                    const auto& t = texels[(lk.j * span + b) * row + lk.i * span + a];
+                    const Vec3f d = t.pos - rp.position;
+                    if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
+                        Dot(d, t.nrm) >= 0)
+                        continue;  // this pair cannot carry light
+                    batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                }
+        }
+        const size_t n = batch_.size();
+        const size_t probes = std::min(want, n / 2);
+        if (probes < 2 || ratio > double(probes))
+            return kVisUnknown;
+        const size_t hidden = TraceProbes(probes);
+        return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
+    }
+
+    // Probe k is segment ProbePair(k) of batch_'s n: increasing, and distinct as n >= 2
+    // probes. Traces them into probe_ and returns how many are blocked.
+    static size_t ProbePair(size_t k, size_t n, size_t probes) {
+        return (2 * k + 1) * n / (2 * probes);
+    }
+    size_t TraceProbes(size_t probes) {
+        probe_.Clear();
+        for (size_t k = 0; k < probes; ++k)
+            probe_.segments.push_back(batch_.segments[ProbePair(k, batch_.size(), probes)]);
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
@@ -575,6 +660,10 @@ private:
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
     std::vector<Vec3f> albedo_;
+    static constexpr size_t kPointSlots = 1024;  // x 9 points x 60 B at M2: 0.55 MB
+    std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX
+    std::vector<ReceiverPoint> point_cache_;
+    std::vector<Vec3f> albedo_cache_;
     std::vector<Pair> pairs_;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_;

@@ -73,6 +73,9 @@ struct SolveOptions {
     // Chart-level links trace this many stratified pairs first (at most half of their
     // pairs) and the rest only when those disagree (0: one ray per pair always).
     int link_probes = 8;
+    // A link about to be split probes its visibility the same way first, and a subtree
+    // whose probes agree takes their answer without rays (Gatherer::SplitVisibility).
+    bool split_probes = true;
     // --multi-emitter simplify: write each chart's classification and refinement as
     // DIR/chart-N.png here (multi_emitter_debug.h); empty: none.
     std::string multi_emitter_debug;

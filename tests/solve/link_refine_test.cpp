@@ -140,12 +140,14 @@ struct BoxRun {
 };
 
 BoxRun SolveBox(double link_tolerance, bool block = false,
-               int link_probes = SolveOptions{}.link_probes) {
+               int link_probes = SolveOptions{}.link_probes,
+               bool split_probes = SolveOptions{}.split_probes) {
     testing::LitBox box(5, 32, block);
     SolveOptions opt;
     opt.settings.max_bounces = 8;
     opt.link_tolerance = link_tolerance;
     opt.link_probes = link_probes;
+    opt.split_probes = split_probes;
     Solver solver(box.scene, box.charts, box.vis, opt);
     solver.Run();
     BoxRun r;
@@ -216,6 +218,33 @@ TEST(LinkRefine, ProbesKeepTheAnswerOfEveryPairWithFewerRays) {
     EXPECT_LT(worst, 0.01);
     EXPECT_LT(mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) * 2 / 5);  // measured: 0.29
+}
+
+// Split probes (Solver::Gatherer::SplitVisibility): a link about to be split whose probes
+// agree hands their answer to its whole subtree, which then traces no rays (visible) or is
+// dropped (hidden). With the table's shadow in the box, against probes on the evaluated
+// links alone.
+TEST(LinkRefine, SplitProbesKeepTheShadowWithFewerRays) {
+    const double tol = SolveOptions{}.link_tolerance;
+    const int probes = SolveOptions{}.link_probes;
+    const BoxRun ref = SolveBox(tol, true, probes, false), got = SolveBox(tol, true, probes, true);
+    ASSERT_EQ(ref.e.size(), got.e.size());
+    double top = 0, worst = 0, sum = 0;
+    for (double v : ref.e)
+        top = std::max(top, v);
+    ASSERT_GT(top, 0);
+    for (size_t k = 0; k < ref.e.size(); ++k) {
+        const double d = std::abs(got.e[k] - ref.e[k]) / top;
+        worst = std::max(worst, d);
+        sum += d;
+    }
+    const double mean = sum / double(ref.e.size());
+    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f\n",
+                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
+                worst, mean);
+    EXPECT_LT(worst, 0.01);
+    EXPECT_LT(mean, 0.001);
+    EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) / 2);  // measured: 0.38
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {
