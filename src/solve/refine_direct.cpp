@@ -336,6 +336,7 @@ void Solver::RefineDirect(uint32_t chart) {
     if (direct.has_sky())
         GatherSky(chart, direct, std::min(max_level, std::max(0, opt_.sky_level + size_levels)),
                   max_level);
+    RefineForBounces(chart, max_level);
 }
 
 // One node under --multi-emitter simplify (seed 002, section 5): its fit into coeffs, and

@@ -192,6 +192,16 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.db_max = Luminance(t.db);
         }
     }
+    if (top < sc.geometry.finest_level()) {
+        e->facets.resize(size_t(n) * n * 4);
+        for (uint32_t j = 0; j < n; ++j)
+            for (uint32_t i = 0; i < n; ++i)
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& g = sc.geometry.At(top + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
+                    e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
+                                                               g.area};
+                }
+    }
     // Coarser samples: area-weighted means.
     for (int l = top - 1; l >= 0; --l) {
         const auto& fine = e->levels[size_t(l) + 1];
@@ -445,7 +455,7 @@ private:
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
         const auto& texels = em.levels[size_t(ls)];
-        CollectPairs(texels, lk, ls, em.scale, vis < 0);
+        CollectPairs(em, lk, ls, vis < 0);
         if (pairs_.empty())
             return;
         if (vis < 0)
@@ -619,12 +629,14 @@ private:
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h) and its visibility segment.
-    void CollectPairs(const std::vector<Emitter::Texel>& texels, const Link& lk, int ls,
-                      double emitter_scale, bool rays) {
+    void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
+        const auto& texels = em.levels[size_t(ls)];
+        const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
         pairs_.clear();
         batch_.Clear();
+        RegionFacets(em, lk, ls);
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
             const Vec3f org = rp.vis_point + rp.normal * eps_;
@@ -634,16 +646,56 @@ private:
                     const auto& t = texels[k];
                     if (t.area <= 0 || t.db_max <= 0)
                         continue;
+                    const size_t f0 = size_t(b * span + a) * 4;
                     Vec3d contrib;
-                    if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area}, texel_side,
-                                       &contrib))
+                    int carrier;
+                    if (!FacetedTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area},
+                                         Facets(f0), texel_side,
+                                         &contrib, &carrier))
                         continue;
                     pairs_.push_back({p, k, Vec3f(contrib)});
                     if (rays)
-                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                        batch_.AddSegment(org, carrier < 0 ? t.vis + t.nrm * eps_
+                                                           : facet_vis_[f0 + size_t(carrier)] +
+                                                                 facets_[f0 + size_t(carrier)].nrm *
+                                                                     eps_);
                 }
             }
         }
+    }
+
+    // The facets of every sample of region lk at level ls, 4 per sample in the region's
+    // row order (facet_count_ 4), or none (0): a coarse level's are its children, the
+    // finest level's the emitter's facets.
+    void RegionFacets(const Emitter& em, const Link& lk, int ls) {
+        const int top = int(em.levels.size()) - 1;
+        const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
+        facets_.clear();
+        facet_vis_.clear();
+        facet_count_ = ls < top || !em.facets.empty() ? 4 : 0;
+        if (facet_count_ == 0)
+            return;
+        for (uint32_t b = 0; b < span; ++b)
+            for (uint32_t a = 0; a < span; ++a) {
+                const uint32_t i = lk.i * span + a, j = lk.j * span + b;
+                for (uint32_t c = 0; c < 4; ++c) {
+                    if (ls < top) {
+                        const auto& k = em.levels[size_t(ls) + 1][size_t(2 * j + (c >> 1)) * row * 2 +
+                                                                  2 * i + (c & 1)];
+                        facets_.push_back({k.pos, k.nrm, k.area});
+                        facet_vis_.push_back(k.vis);
+                    } else {
+                        const auto& f = em.facets[(size_t(j) * row + i) * 4 + c];
+                        facets_.push_back({f.pos, f.nrm, f.area});
+                        facet_vis_.push_back(f.vis);
+                    }
+                }
+            }
+    }
+
+    std::span<const TexelSource> Facets(size_t first) const {
+        return facet_count_ ? std::span(facets_).subspan(first, facet_count_)
+                            : std::span<const TexelSource>();
     }
 
     Solver& s_;
@@ -665,6 +717,9 @@ private:
     std::vector<ReceiverPoint> point_cache_;
     std::vector<Vec3f> albedo_cache_;
     std::vector<Pair> pairs_;
+    std::vector<TexelSource> facets_;  // RegionFacets()
+    std::vector<Vec3f> facet_vis_;
+    size_t facet_count_ = 0;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_;
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB

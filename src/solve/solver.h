@@ -162,6 +162,13 @@ private:
         };
         uint32_t chart = 0;
         std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
+        // The finest texels' facets (transfer.h, FacetedTransfer): the geometry one level
+        // finer, 4 per texel in quadrant order; empty when the samples are the finest level.
+        struct Facet {
+            Vec3f pos, nrm, vis;
+            float area = 0;
+        };
+        std::vector<Facet> facets;
         Vec3f center;
         float radius = 0;
         double scale = 1;
@@ -176,6 +183,7 @@ private:
         Vec3f pos, nrm, org;  // org: the ray origin, off the surface
     };
     class DirectSampler;  // refine_direct.cpp
+    class BounceRefiner;  // refine_indirect.cpp
     class Gatherer;
     void BuildClusters();
     void LinkClusters(const Emitter& em, std::vector<float>* links, uint64_t* accepted,
@@ -195,6 +203,8 @@ private:
     float SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
                          SimplifiedFit& sf, std::vector<float>& coeffs);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level);
+    // refine_indirect.cpp: leaves split for the first bounce before the gather starts.
+    void RefineForBounces(uint32_t chart, int max_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
                 const std::vector<std::vector<float>>& links);

@@ -45,4 +45,34 @@ bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double 
     return true;
 }
 
+bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
+                     int* carrier) {
+    *carrier = -1;
+    int toward = 0, real = 0;
+    for (const TexelSource& f : facets) {
+        if (f.area <= 0)
+            continue;
+        ++real;
+        toward += Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)) > 0 ? 1 : 0;
+    }
+    if (toward == 0 || toward == real)
+        return TexelTransfer(x, n, t, texel_side, e);  // all one way: the mean decides
+    *e = Vec3d(0, 0, 0);
+    double most = 0;
+    bool any = false;
+    for (size_t k = 0; k < facets.size(); ++k) {
+        Vec3d part;
+        if (facets[k].area <= 0 || !TexelTransfer(x, n, facets[k], 0.5 * texel_side, &part))
+            continue;
+        *e += part;
+        any = true;
+        if (Dot(part, Vec3d(n)) > most) {
+            most = Dot(part, Vec3d(n));
+            *carrier = int(k);
+        }
+    }
+    return any;
+}
+
 }  // namespace mebake::solve

@@ -10,6 +10,8 @@
 
 #include "core/vec.h"
 
+#include <span>
+
 namespace mebake::solve {
 
 struct TexelSource {
@@ -22,5 +24,17 @@ struct TexelSource {
 // `texel_side` is the side of the texel's level, which picks the form.
 bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double texel_side,
                    Vec3d* e);
+
+// The same for a sample `t` that stands for finer facets (its normal their area-weighted
+// mean, the same unit radiosity; `facets` may be empty). Where the facets do not all face
+// the same way from x, their own transfers are summed (each facet of side texel_side / 2):
+// the mean normal's (cos)+ is below the facets' summed (cos)+ (max(0, .) is convex), so
+// with the mean alone a sample across a crease or fold lost the light of its facets facing
+// x, or all of it when the mean faced away (bench/RESULTS.md, "Issue 14 (session 10)").
+// *carrier: the facet that carries the most of it, or -1 for the sample as a whole (the
+// caller's visibility ray ends there).
+bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
+                     int* carrier);
 
 }  // namespace mebake::solve

@@ -82,5 +82,38 @@ TEST(Transfer, NoLightFromBelowTheHorizonFromBehindOrFromX) {
     EXPECT_FALSE(TexelTransfer({0, 0, 1}, {0, 0, 1}, t, 0.1, &e)) << "at x";
 }
 
+
+TEST(Transfer, FacetsAcrossAFoldCarryTheLightTheirMeanNormalLoses) {
+    // A sample made of two facets folded 120 degrees apart (a ridge along y): the mean
+    // normal is +z, the facets tilt 60 degrees to -x and +x. x lies off to the -x side,
+    // slightly below the sample: only the -x facet faces it, the mean faces away.
+    const double side = 0.1;
+    const float a = float(side * side / 2);
+    const float s60 = std::sqrt(3.f) / 2;
+    const TexelSource west{{-0.025f, 0, 0}, {-s60, 0, 0.5f}, a}, east{{0.025f, 0, 0}, {s60, 0, 0.5f}, a};
+    const TexelSource mean{{0, 0, 0}, {0, 0, 1}, 2 * a};
+    const TexelSource facets[2] = {west, east};
+    const Vec3f x{-1.0f, 0, -0.05f}, n = Normalize(Vec3f{1.0f, 0, 0.2f});
+    Vec3d e_mean, e_west, e;
+    int carrier = 7;
+    EXPECT_FALSE(TexelTransfer(x, n, mean, side, &e_mean)) << "the mean faces away";
+    ASSERT_TRUE(TexelTransfer(x, n, west, side / 2, &e_west));
+    ASSERT_TRUE(FacetedTransfer(x, n, mean, facets, side, &e, &carrier));
+    EXPECT_EQ(carrier, 0);
+    EXPECT_NEAR(Length(e - e_west) / Length(e_west), 0, 1e-12) << "the west facet's own light";
+    EXPECT_GT(Dot(e, Vec3d(n)), 0);
+    // Facets all facing x: the sample as a whole, as before.
+    const Vec3f above{0.3f, 0.2f, 2.0f}, down{0, 0, -1};
+    Vec3d e_whole;
+    ASSERT_TRUE(TexelTransfer(above, down, mean, side, &e_whole));
+    ASSERT_TRUE(FacetedTransfer(above, down, mean, facets, side, &e, &carrier));
+    EXPECT_EQ(carrier, -1);
+    EXPECT_EQ(e.x, e_whole.x);
+    EXPECT_EQ(e.z, e_whole.z);
+    // No facets: TexelTransfer.
+    ASSERT_TRUE(FacetedTransfer(above, down, mean, {}, side, &e, &carrier));
+    EXPECT_EQ(e.z, e_whole.z);
+}
+
 }  // namespace
 }  // namespace mebake::solve
