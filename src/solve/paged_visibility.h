@@ -14,9 +14,10 @@
 //   segments per piece) do not rebuild whole pieces for a few rays.
 // Answers: occlusion is the OR over pieces: a triangle's test does not depend on which scene
 // holds it (same flags, watertight test), so the bits equal the whole scene's; closest hit
-// is the smallest t over pieces, ties to the lowest (geometry, primitive): the whole scene's
-// answer wherever it has no tie (where it has one it picks either). Neither depends on the
-// cache's state, the order pieces are traced in or the threads.
+// is the smallest t over pieces, ties to the lowest (geometry, primitive), inside a piece as
+// across them (VisibilityScene::IntersectRanked): the whole scene's answer, ties included
+// (its rule is the same). Neither depends on the cache's state, the order pieces are traced
+// in or the threads.
 //
 // Used through VisibilityScene::EnablePaging (visibility.h); nothing else includes this.
 #pragma once
@@ -97,6 +98,7 @@ private:
     std::vector<uint32_t> geometry_first_;    // first global triangle of each geometry
     std::vector<Piece> pieces_;
     stream::TriangleOctree tree_;             // over all triangles; its leaves route segments
+    stream::OctreeRouter router_;             // tree_'s boxes widened for routing
     std::vector<uint32_t> leaf_piece_;        // piece of each node (leaves only)
     std::vector<uint32_t> leaf_first_;        // first local triangle of each leaf in its piece
 

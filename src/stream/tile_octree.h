@@ -34,11 +34,38 @@ struct TriangleOctree {
     bool empty() const { return nodes.empty(); }
     // The leaves in depth-first order (children in octant order): spatially coherent runs.
     std::vector<uint32_t> Leaves() const;
-    // Calls visit(leaf) for every leaf whose box the segment o + t d, t in [t0, t1], crosses
-    // (a conservative slab test), in depth-first order.
+};
+
+// SegmentMayCrossBox's test in two halves, for routing many segments through many boxes:
+// a box widened once (WideBox), a segment prepared once (SegmentProbe, its reciprocal
+// direction), then each test is a few multiplications.
+struct WideBox {
+    double lo[3], hi[3];
+};
+WideBox WidenBox(const Vec3f& lo, const Vec3f& hi);
+struct SegmentProbe {
+    double org[3], inv[3];  // inv = 1 / dir where dir != 0
+    bool flat[3];           // dir == 0 on this axis
+    double tmin, tmax;      // the parameter range, widened
+    int fixed;              // -1: test boxes; 0 / 1: the answer for every box
+};
+SegmentProbe PrepareSegment(const Vec3f& o, const Vec3f& d, float t0, float t1);
+bool MayCross(const SegmentProbe& s, const WideBox& b);
+
+// Leaf queries over an octree, its node boxes widened once (the tree must outlive it).
+class OctreeRouter {
+public:
+    OctreeRouter() = default;
+    explicit OctreeRouter(const TriangleOctree& tree);
+    // Calls visit(leaf) for every leaf whose box the segment o + t d, t in [t0, t1], may
+    // cross (SegmentMayCrossBox), in depth-first order.
     template <typename Visit>
     void ForEachLeafOnSegment(const Vec3f& o, const Vec3f& d, float t0, float t1,
                               Visit&& visit) const;
+
+private:
+    const TriangleOctree* tree_ = nullptr;
+    std::vector<WideBox> boxes_;  // per node
 };
 
 struct OctreeOptions {
@@ -60,19 +87,23 @@ bool SegmentMayCrossBox(const Vec3f& o, const Vec3f& d, float t0, float t1, cons
 void CheckTriangleOctree(const TriangleOctree& tree, size_t triangle_count, const char* file);
 
 template <typename Visit>
-void TriangleOctree::ForEachLeafOnSegment(const Vec3f& o, const Vec3f& d, float t0, float t1,
-                                          Visit&& visit) const {
-    if (nodes.empty())
+void OctreeRouter::ForEachLeafOnSegment(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                                        Visit&& visit) const {
+    if (!tree_ || tree_->nodes.empty())
+        return;
+    const SegmentProbe probe = PrepareSegment(o, d, t0, t1);
+    if (probe.fixed == 0)
         return;
     uint32_t stack[8 * 32];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const OctreeNode& n = nodes[stack[--top]];
-        if (!SegmentMayCrossBox(o, d, t0, t1, n.lo, n.hi))
+        const uint32_t index = stack[--top];
+        if (probe.fixed < 0 && !MayCross(probe, boxes_[index]))
             continue;
+        const OctreeNode& n = tree_->nodes[index];
         if (n.children == 0) {
-            visit(uint32_t(&n - nodes.data()));
+            visit(index);
             continue;
         }
         for (uint32_t c = n.children; c-- > 0;)  // pushed in reverse: popped in octant order
