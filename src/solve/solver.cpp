@@ -352,6 +352,17 @@ private:
         uint32_t texel;
         Vec3f contribution;  // E per unit radiosity of the texel
     };
+    struct PointSet {  // a receiver node's Gauss points
+        std::vector<ReceiverPoint> pts;
+        std::vector<Vec3f> albedo;
+    };
+    struct Deferred {  // a link made, not yet summed (EvaluateLink, Resolve)
+        uint32_t node, points;                        // receiver node, its point_sets_ entry
+        const std::vector<Emitter::Texel>* texels;  // the emitter level sampled
+        float vis;                                   // < 0: one ray per pair
+        size_t pair0, pair1;                         // its pairs_
+        size_t seg0;  // its first segment in batch_ (vis < 0: one per pair)
+    };
 
     // What the error-driven stop knows of node n's receiver points (cached per node): the
     // cone of the normals GaussPoints() gives there, from the level-gl texels its bilinear
@@ -429,39 +440,143 @@ private:
 
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
-    // pair; otherwise every pair is weighted by vis (a cluster link's estimate).
+    // pair; otherwise every pair is weighted by vis (a cluster link's estimate). The link
+    // waits with its pairs and segments until kDeferPairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         if (n != pts_node_) {  // the same node's points serve every emitter
-            s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+            point_sets_.emplace_back();
+            s_.GaussPoints(sc_, field_.node(n), ng_, false, &point_sets_.back().pts,
+                           &point_sets_.back().albedo);
             pts_node_ = n;
         }
         const auto& texels = em.levels[size_t(ls)];
-        CollectPairs(texels, lk, ls, em.scale, vis < 0);
-        if (pairs_.empty())
+        Deferred d{uint32_t(n), uint32_t(point_sets_.size() - 1), &texels, vis, pairs_.size(),
+                   0, batch_.size()};
+        CollectPairs(point_sets_.back().pts, texels, lk, ls, em.scale, vis < 0);
+        d.pair1 = pairs_.size();
+        if (d.pair1 == d.pair0)
             return;
-        if (vis < 0)
-            TraceLink();
-        e9_.assign(pts_.size() * 9, 0.f);
-        for (size_t q = 0; q < pairs_.size(); ++q) {
-            if (vis < 0 && batch_.occluded[q])
+        deferred_.push_back(d);
+        if (pairs_.size() >= kDeferPairs)
+            Resolve();
+    }
+
+    // Memory-coherent link rays (Pharr et al. 1997): the deferred links' rays go to the
+    // visibility in two calls, so a paged visibility meets each piece once per batch of
+    // thousands of rays instead of once per link (it routes a call's rays piece by piece,
+    // resident pieces first). First every link's probes: a stratified subset of link_probes
+    // pairs (at most half of them: 4 of a 3 x 3-point link to one texel); when those agree
+    // (the link wholly visible or wholly hidden, the usual case), their answer stands for
+    // every pair. Then the other pairs of the partial links, so a partial link costs one ray
+    // per pair as without probes. Last the links are summed in the order they were made.
+    // Each ray's answer is its own, so the bytes are those of tracing link by link.
+    void Resolve() {
+        const size_t probes_wanted = size_t(std::max(0, s_.opt_.link_probes));
+        auto probe_count = [&](const Deferred& d) {
+            return std::min(probes_wanted, (d.pair1 - d.pair0) / 2);
+        };
+        // Probe k of a link of n pairs is pair (2k + 1) n / (2 probes): increasing, and
+        // distinct as n >= 2 probes. Links with fewer than 2 probes trace every pair here.
+        auto probe_pair = [](size_t k, size_t n, size_t probes) {
+            return (2 * k + 1) * n / (2 * probes);
+        };
+        probe_.Clear();
+        for (const Deferred& d : deferred_) {
+            if (d.vis >= 0)
+                continue;
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            if (probes < 2)
+                probe_.segments.insert(probe_.segments.end(), &batch_.segments[d.seg0],
+                                       &batch_.segments[d.seg0] + n);
+            else
+                for (size_t k = 0; k < probes; ++k)
+                    probe_.segments.push_back(batch_.segments[d.seg0 + probe_pair(k, n, probes)]);
+        }
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        // The partial links' other pairs; every pair's answer into batch_.occluded.
+        batch_.occluded.assign(batch_.size(), 0);
+        rest_.Clear();
+        std::vector<uint8_t> partial(deferred_.size(), 0);
+        for (size_t at = 0, i = 0; i < deferred_.size(); ++i) {
+            const Deferred& d = deferred_[i];
+            if (d.vis >= 0)
+                continue;
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            uint8_t* occ = &batch_.occluded[d.seg0];
+            if (probes < 2) {
+                std::copy(&probe_.occluded[at], &probe_.occluded[at] + n, occ);
+                at += n;
+                continue;
+            }
+            const size_t hidden = size_t(std::count(&probe_.occluded[at],
+                                                    &probe_.occluded[at] + probes, uint8_t(1)));
+            if (hidden == 0 || hidden == probes) {
+                std::fill(occ, occ + n, hidden == 0 ? 0 : 1);
+            } else {
+                partial[i] = 1;
+                for (size_t q = 0, k = 0; q < n; ++q) {
+                    if (k < probes && q == probe_pair(k, n, probes))
+                        occ[q] = probe_.occluded[at + k++];
+                    else
+                        rest_.segments.push_back(batch_.segments[d.seg0 + q]);
+                }
+            }
+            at += probes;
+        }
+        rest_.Trace(s_.vis_, RayKind::kLink);
+        for (size_t r = 0, i = 0; i < deferred_.size(); ++i) {
+            if (!partial[i])
+                continue;
+            const Deferred& d = deferred_[i];
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            for (size_t q = 0, k = 0; q < n; ++q) {
+                if (k < probes && q == probe_pair(k, n, probes))
+                    ++k;
+                else
+                    batch_.occluded[d.seg0 + q] = rest_.occluded[r++];
+            }
+        }
+        for (const Deferred& d : deferred_)
+            SumLink(d);
+        deferred_.clear();
+        pairs_.clear();
+        batch_.Clear();
+        point_sets_.clear();
+        pts_node_ = SIZE_MAX;
+    }
+
+    // A resolved link's light at its node's Gauss points, added to the node's sum.
+    void SumLink(const Deferred& d) {
+        const PointSet& ps = point_sets_[d.points];
+        e9_.assign(ps.pts.size() * 9, 0.f);
+        for (size_t q = d.pair0; q < d.pair1; ++q) {
+            if (d.vis < 0 && batch_.occluded[d.seg0 + (q - d.pair0)])
                 continue;
             const Pair& pr = pairs_[q];
-            const Vec3f db = vis < 0 ? texels[pr.texel].db : texels[pr.texel].db * vis;
+            const Vec3f& tdb = (*d.texels)[pr.texel].db;
+            const Vec3f db = d.vis < 0 ? tdb : tdb * d.vis;
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k)
                     e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
         }
-        ToFieldValues(pts_, albedo_, e9_, s_.opt_.settings.radiosity, &vals_);
-        float* acc = NodeValues(n);
+        ToFieldValues(ps.pts, ps.albedo, e9_, s_.opt_.settings.radiosity, &vals_);
+        float* acc = NodeValues(d.node);
         for (size_t k = 0; k < vals_.size(); ++k)
             acc[k] += vals_[k];
     }
 
 public:
-    // Projects every node's summed link values onto its pending coefficients (in the order
-    // the nodes were first linked) and empties the sums. The projection is linear, so once
+    // Resolves the links still deferred, then projects every node's summed link values onto
+    // its pending coefficients (in the order the nodes were first linked) and empties the sums. The projection is linear, so once
     // per node and gather instead of once per link (it was 10 % of lucy's solve).
     void Flush() {
+        Resolve();
+        FlushSums();
+    }
+
+private:
+    // Flush() of the sums alone (the links they hold are resolved).
+    void FlushSums() {
         for (size_t slot = 0; slot < slot_nodes_.size(); ++slot) {
             const uint32_t n = slot_nodes_[slot];
             ProjectGauss(order_, ng_, &node_values_[slot * values_per_node_], field_.blocks(),
@@ -475,7 +590,6 @@ public:
         node_values_.clear();
     }
 
-private:
     // The sum of node n's link values at its Gauss points (ToFieldValues' layout). At most
     // kMaxSlots nodes are summed at once (a bounded buffer: the order of the flushes
     // depends on the links alone, so the result does on no thread count).
@@ -484,7 +598,7 @@ private:
             node_slot_.resize(field_.node_count(), -1);
         if (node_slot_[n] < 0) {
             if (slot_nodes_.size() == kMaxSlots)
-                Flush();
+                FlushSums();
             node_slot_[n] = int32_t(slot_nodes_.size());
             slot_nodes_.push_back(uint32_t(n));
             node_values_.resize(slot_nodes_.size() * values_per_node_, 0.f);
@@ -492,56 +606,16 @@ private:
         return &node_values_[size_t(node_slot_[n]) * values_per_node_];
     }
 
-    // Visibility of every pair of the link. A stratified subset of link_probes pairs (at
-    // most half of them: 4 of a 3 x 3-point link to one texel) is traced first: when those
-    // rays agree (the link wholly visible or wholly hidden, the usual case), their answer
-    // stands for every pair; only partial links trace the other pairs, keeping the probes'
-    // answers, so a partial link costs one ray per pair as without probes.
-    void TraceLink() {
-        const size_t n = pairs_.size();
-        const size_t probes = std::min(size_t(std::max(0, s_.opt_.link_probes)), n / 2);
-        if (probes < 2) {
-            batch_.Trace(s_.vis_, RayKind::kLink);
-            return;
-        }
-        // Probe k is pair (2k + 1) n / (2 probes): increasing, and distinct as n >= 2 probes.
-        auto probe_pair = [&](size_t k) { return (2 * k + 1) * n / (2 * probes); };
-        probe_.Clear();
-        for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(batch_.segments[probe_pair(k)]);
-        probe_.Trace(s_.vis_, RayKind::kLink);
-        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
-        if (hidden == 0 || hidden == probes) {
-            batch_.occluded.assign(n, hidden == 0 ? 0 : 1);
-            return;
-        }
-        rest_.Clear();
-        for (size_t q = 0, k = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
-                ++k;
-            else
-                rest_.segments.push_back(batch_.segments[q]);
-        }
-        rest_.Trace(s_.vis_, RayKind::kLink);
-        batch_.occluded.resize(n);
-        for (size_t q = 0, k = 0, r = 0; q < n; ++q) {
-            if (k < probes && q == probe_pair(k))
-                batch_.occluded[q] = probe_.occluded[k++];
-            else
-                batch_.occluded[q] = rest_.occluded[r++];
-        }
-    }
-
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h) and its visibility segment.
-    void CollectPairs(const std::vector<Emitter::Texel>& texels, const Link& lk, int ls,
+    // Appended to pairs_ and batch_.
+    void CollectPairs(const std::vector<ReceiverPoint>& pts,
+                      const std::vector<Emitter::Texel>& texels, const Link& lk, int ls,
                       double emitter_scale, bool rays) {
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
-        pairs_.clear();
-        batch_.Clear();
-        for (uint32_t p = 0; p < pts_.size(); ++p) {
-            const ReceiverPoint& rp = pts_[p];
+        for (uint32_t p = 0; p < pts.size(); ++p) {
+            const ReceiverPoint& rp = pts[p];
             const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b) {
                 for (uint32_t a = 0; a < span; ++a) {
@@ -570,11 +644,14 @@ private:
     const float eps_;
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
-    size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
+    size_t pts_node_ = SIZE_MAX;  // the node point_sets_.back() belongs to
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
-    std::vector<ReceiverPoint> pts_;
-    std::vector<Vec3f> albedo_;
+    std::vector<PointSet> point_sets_;   // the deferred links' receiver points
+    std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
+    // Their pairs and segments: ~60 B a pair here and ~100 in the paged visibility, so
+    // ~2.5 MB per gathering thread.
+    static constexpr size_t kDeferPairs = size_t(1) << 14;
     std::vector<Pair> pairs_;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_;
