@@ -131,13 +131,7 @@ std::shared_ptr<const VisibilityScene> PagedVisibility::BuildPiece(uint32_t p) c
 
 PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t>* leaves) const {
     const Piece& piece = pieces_[p];
-    std::sort(leaves->begin(), leaves->end());
-    leaves->erase(std::unique(leaves->begin(), leaves->end()), leaves->end());
-    uint64_t triangles = 0;
-    for (uint32_t leaf : *leaves)
-        triangles += tree_.nodes[leaf].count;
     Lease lease;
-    bool buy = false;
     {
         std::lock_guard lock(mutex_);
         Cached& c = cache_[p];
@@ -148,6 +142,16 @@ PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t
             lease.global = piece.global;
             return lease;
         }
+    }
+    std::sort(leaves->begin(), leaves->end());
+    leaves->erase(std::unique(leaves->begin(), leaves->end()), leaves->end());
+    uint64_t triangles = 0;
+    for (uint32_t leaf : *leaves)
+        triangles += tree_.nodes[leaf].count;
+    bool buy = false;
+    {
+        std::lock_guard lock(mutex_);
+        Cached& c = cache_[p];
         c.rented += triangles;
         buy = c.rented >= piece.global.size();
     }

@@ -161,29 +161,6 @@ SegmentProbe PrepareSegment(const Vec3f& o, const Vec3f& d, float t0, float t1) 
     return s;
 }
 
-// The slab test. (lo - o) * inv may differ from (lo - o) / d by an ulp of a double, far
-// below the box's margin and the range's widening.
-bool MayCross(const SegmentProbe& s, const WideBox& b) {
-    if (s.fixed >= 0)
-        return s.fixed == 1;
-    double tmin = s.tmin, tmax = s.tmax;
-    for (int a = 0; a < 3; ++a) {
-        if (s.flat[a]) {
-            if (s.org[a] < b.lo[a] || s.org[a] > b.hi[a])
-                return false;
-            continue;
-        }
-        double ta = (b.lo[a] - s.org[a]) * s.inv[a], tb = (b.hi[a] - s.org[a]) * s.inv[a];
-        if (ta > tb)
-            std::swap(ta, tb);
-        tmin = std::max(tmin, ta);
-        tmax = std::min(tmax, tb);
-        if (tmin > tmax)
-            return false;
-    }
-    return true;
-}
-
 bool SegmentMayCrossBox(const Vec3f& o, const Vec3f& d, float t0, float t1, const Vec3f& lo,
                         const Vec3f& hi) {
     return MayCross(PrepareSegment(o, d, t0, t1), WidenBox(lo, hi));

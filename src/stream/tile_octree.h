@@ -9,8 +9,10 @@
 // on the input only (a stable partition by octant, children in octant order).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <span>
 #include <vector>
 
@@ -50,7 +52,29 @@ struct SegmentProbe {
     int fixed;              // -1: test boxes; 0 / 1: the answer for every box
 };
 SegmentProbe PrepareSegment(const Vec3f& o, const Vec3f& d, float t0, float t1);
-bool MayCross(const SegmentProbe& s, const WideBox& b);
+// The slab test (inline: the paged visibility's routing makes tens of them per segment).
+// (lo - o) * inv may differ from (lo - o) / d by an ulp of a double, far below the box's
+// margin and the range's widening.
+inline bool MayCross(const SegmentProbe& s, const WideBox& b) {
+    if (s.fixed >= 0)
+        return s.fixed == 1;
+    double tmin = s.tmin, tmax = s.tmax;
+    for (int a = 0; a < 3; ++a) {
+        if (s.flat[a]) {
+            if (s.org[a] < b.lo[a] || s.org[a] > b.hi[a])
+                return false;
+            continue;
+        }
+        double ta = (b.lo[a] - s.org[a]) * s.inv[a], tb = (b.hi[a] - s.org[a]) * s.inv[a];
+        if (ta > tb)
+            std::swap(ta, tb);
+        tmin = std::max(tmin, ta);
+        tmax = std::min(tmax, tb);
+        if (tmin > tmax)
+            return false;
+    }
+    return true;
+}
 
 // Leaf queries over an octree, its node boxes widened once (the tree must outlive it).
 class OctreeRouter {
