@@ -441,7 +441,7 @@ private:
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
     // pair; otherwise every pair is weighted by vis (a cluster link's estimate). The link
-    // waits with its pairs and segments until kDeferPairs have gathered (Resolve).
+    // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         if (n != pts_node_) {  // the same node's points serve every emitter
             point_sets_.emplace_back();
@@ -457,7 +457,7 @@ private:
         if (d.pair1 == d.pair0)
             return;
         deferred_.push_back(d);
-        if (pairs_.size() >= kDeferPairs)
+        if (pairs_.size() >= s_.opt_.link_defer_pairs)
             Resolve();
     }
 
@@ -649,9 +649,8 @@ private:
     std::vector<Vec3f> cone_normals_;
     std::vector<PointSet> point_sets_;   // the deferred links' receiver points
     std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
-    // Their pairs and segments: ~60 B a pair here and ~100 in the paged visibility, so
-    // ~2.5 MB per gathering thread.
-    static constexpr size_t kDeferPairs = size_t(1) << 14;
+    // Their pairs and segments (at most SolveOptions::link_defer_pairs, plus one link's): ~60 B
+    // a pair here and ~100 in the paged visibility, ~2.5 MB per gathering thread at 16K.
     std::vector<Pair> pairs_;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_;

@@ -73,6 +73,9 @@ struct SolveOptions {
     // Chart-level links trace this many stratified pairs first (at most half of their
     // pairs) and the rest only when those disagree (0: one ray per pair always).
     int link_probes = 8;
+    // A gather's link rays wait until this many (point, texel) pairs gather, then go to the
+    // visibility together (Gatherer::Resolve; 1: link by link). The same bytes for any value.
+    size_t link_defer_pairs = size_t(1) << 14;
     // --multi-emitter simplify: write each chart's classification and refinement as
     // DIR/chart-N.png here (multi_emitter_debug.h); empty: none.
     std::string multi_emitter_debug;
