@@ -31,7 +31,7 @@ struct PagedVisibility::Route {
 
 struct PagedVisibility::Lease {
     std::shared_ptr<const VisibilityScene> scene;
-    const uint32_t* global = nullptr;  // global triangle id of each of the scene's triangles
+    std::span<const uint32_t> global;  // global triangle id of each of the scene's triangles
     std::vector<uint32_t> rented;      // the ids, when the scene is rented
 };
 
@@ -81,6 +81,7 @@ void PagedVisibility::Commit() {
     oo.leaf_triangles = std::max<uint32_t>(options_.piece_triangles / 64, 16);
     oo.max_depth = 20;
     tree_ = stream::BuildTriangleOctree(pos, tris, oo);
+    router_ = stream::OctreeRouter(tree_);
     const stream::TriangleOctree& tree = tree_;
     leaf_piece_.assign(tree.nodes.size(), 0);
     leaf_first_.assign(tree.nodes.size(), 0);
@@ -130,13 +131,7 @@ std::shared_ptr<const VisibilityScene> PagedVisibility::BuildPiece(uint32_t p) c
 
 PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t>* leaves) const {
     const Piece& piece = pieces_[p];
-    std::sort(leaves->begin(), leaves->end());
-    leaves->erase(std::unique(leaves->begin(), leaves->end()), leaves->end());
-    uint64_t triangles = 0;
-    for (uint32_t leaf : *leaves)
-        triangles += tree_.nodes[leaf].count;
     Lease lease;
-    bool buy = false;
     {
         std::lock_guard lock(mutex_);
         Cached& c = cache_[p];
@@ -144,9 +139,19 @@ PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t
             hits_.fetch_add(1, std::memory_order_relaxed);
             lru_.splice(lru_.begin(), lru_, c.lru);
             lease.scene = c.scene;
-            lease.global = piece.global.data();
+            lease.global = piece.global;
             return lease;
         }
+    }
+    std::sort(leaves->begin(), leaves->end());
+    leaves->erase(std::unique(leaves->begin(), leaves->end()), leaves->end());
+    uint64_t triangles = 0;
+    for (uint32_t leaf : *leaves)
+        triangles += tree_.nodes[leaf].count;
+    bool buy = false;
+    {
+        std::lock_guard lock(mutex_);
+        Cached& c = cache_[p];
         c.rented += triangles;
         buy = c.rented >= piece.global.size();
     }
@@ -176,13 +181,13 @@ PagedVisibility::Lease PagedVisibility::Acquire(uint32_t p, std::vector<uint32_t
             malloc_trim(0);
         built_.fetch_add(triangles, std::memory_order_relaxed);
         lease.scene = std::move(scene);
-        lease.global = lease.rented.data();
+        lease.global = lease.rented;
         return lease;
     }
     auto scene = BuildPiece(p);
     loads_.fetch_add(1, std::memory_order_relaxed);
     built_.fetch_add(piece.global.size(), std::memory_order_relaxed);
-    lease.global = piece.global.data();
+    lease.global = piece.global;
     std::vector<std::shared_ptr<const VisibilityScene>> dropped;  // released after the lock
     std::lock_guard lock(mutex_);
     Cached& c = cache_[p];
@@ -217,7 +222,7 @@ void PagedVisibility::RouteSegments(std::span<const Segment> segments,
     for (uint32_t i = 0; i < segments.size(); ++i) {
         const Segment& s = segments[i];
         const Vec3f o(s.ox, s.oy, s.oz), d(s.dx, s.dy, s.dz);
-        tree_.ForEachLeafOnSegment(o, d, s.tnear, s.tfar, [&](uint32_t leaf) {
+        router_.ForEachLeafOnSegment(o, d, s.tnear, s.tfar, [&](uint32_t leaf) {
             Route& r = (*routes)[leaf_piece_[leaf]];
             if (r.segments.empty() || r.segments.back() != i)
                 r.segments.push_back(i);
@@ -293,7 +298,8 @@ void PagedVisibility::Intersect(std::span<const Segment> segments, std::span<Hit
             batch.push_back(segments[i]);
         answer.assign(index.size(), Hit{});
         const Lease lease = Acquire(p, &routes[p].leaves);
-        lease.scene->Intersect(batch, answer);
+        // Ties inside the piece to the lowest global id too: the whole scene's rule.
+        lease.scene->IntersectRanked(batch, answer, lease.global);
         for (size_t k = 0; k < index.size(); ++k) {
             const Hit& h = answer[k];
             if (h.geom_id == kNoHit)

@@ -1,6 +1,7 @@
 // Visibility beyond memory: the visibility mesh split into spatial pieces, each traced by its
 // own Embree scene, built on demand and kept in an LRU under a byte budget (memory-coherent
-// ray tracing, Pharr et al. 1997, with the batch of one query call as the unit of coherence).
+// ray tracing, Pharr et al. 1997, with the batch of one query call as the unit of coherence:
+// the gathers defer their link rays to make calls of thousands, solver.cpp's Resolve).
 //
 // The pieces are runs of consecutive leaves of an octree over all the triangles
 // (stream/tile_octree.h, the same index the tiles carry), so each is spatially compact. A
@@ -10,13 +11,14 @@
 // - a missing one is rented or bought (ski rental): a scene of just the leaves this call's
 //   segments cross is built, traced and dropped, until the triangles so built for the piece
 //   reach its size; then the whole piece is built into the LRU. So the build work is at most
-//   twice what knowing the future would have cost, and small calls (the solver's bring ~20
-//   segments per piece) do not rebuild whole pieces for a few rays.
+//   twice what knowing the future would have cost, and small calls (the direct pass brings
+//   one quadtree node's rays) do not rebuild whole pieces for a few rays.
 // Answers: occlusion is the OR over pieces: a triangle's test does not depend on which scene
 // holds it (same flags, watertight test), so the bits equal the whole scene's; closest hit
-// is the smallest t over pieces, ties to the lowest (geometry, primitive): the whole scene's
-// answer wherever it has no tie (where it has one it picks either). Neither depends on the
-// cache's state, the order pieces are traced in or the threads.
+// is the smallest t over pieces, ties to the lowest (geometry, primitive), inside a piece as
+// across them (VisibilityScene::IntersectRanked): the whole scene's answer, ties included
+// (its rule is the same). Neither depends on the cache's state, the order pieces are traced
+// in or the threads.
 //
 // Used through VisibilityScene::EnablePaging (visibility.h); nothing else includes this.
 #pragma once
@@ -97,6 +99,7 @@ private:
     std::vector<uint32_t> geometry_first_;    // first global triangle of each geometry
     std::vector<Piece> pieces_;
     stream::TriangleOctree tree_;             // over all triangles; its leaves route segments
+    stream::OctreeRouter router_;             // tree_'s boxes widened for routing
     std::vector<uint32_t> leaf_piece_;        // piece of each node (leaves only)
     std::vector<uint32_t> leaf_first_;        // first local triangle of each leaf in its piece
 

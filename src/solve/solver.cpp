@@ -374,6 +374,17 @@ private:
         uint32_t texel;
         Vec3f contribution;  // E per unit radiosity of the texel
     };
+    struct PointSet {  // a receiver node's Gauss points
+        std::vector<ReceiverPoint> pts;
+        std::vector<Vec3f> albedo;
+    };
+    struct Deferred {  // a link made, not yet summed (EvaluateLink, Resolve)
+        uint32_t node, points;                        // receiver node, its point_sets_ entry
+        const std::vector<Emitter::Texel>* texels;  // the emitter level sampled
+        float vis;                                   // < 0: one ray per pair
+        size_t pair0, pair1;                         // its pairs_
+        size_t seg0;  // its first segment in batch_ (vis < 0: one per pair)
+    };
 
     // What the error-driven stop knows of node n's receiver points (cached per node): the
     // cone of the normals GaussPoints() gives there, from the level-gl texels its bilinear
@@ -451,36 +462,138 @@ private:
 
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
-    // pair; otherwise every pair is weighted by vis (a cluster link's estimate).
+    // pair; otherwise every pair is weighted by vis (a cluster link's estimate). The link
+    // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
+        if (n != set_node_) {  // the same node's points serve every emitter
+            point_sets_.push_back({pts_, albedo_});
+            set_node_ = n;
+        }
         const auto& texels = em.levels[size_t(ls)];
+        Deferred d{uint32_t(n), uint32_t(point_sets_.size() - 1), &texels, vis, pairs_.size(),
+                   0, batch_.size()};
         CollectPairs(em, lk, ls, vis < 0);
-        if (pairs_.empty())
+        d.pair1 = pairs_.size();
+        if (d.pair1 == d.pair0)
             return;
-        if (vis < 0)
-            TraceLink();
-        e9_.assign(pts_.size() * 9, 0.f);
-        for (size_t q = 0; q < pairs_.size(); ++q) {
-            if (vis < 0 && batch_.occluded[q])
+        deferred_.push_back(d);
+        if (pairs_.size() >= s_.opt_.link_defer_pairs)
+            Resolve();
+    }
+
+    // Memory-coherent link rays (Pharr et al. 1997): the deferred links' rays go to the
+    // visibility in two calls, so a paged visibility meets each piece once per batch of
+    // thousands of rays instead of once per link (it routes a call's rays piece by piece,
+    // resident pieces first). First every link's probes: a stratified subset of link_probes
+    // pairs (at most half of them: 4 of a 3 x 3-point link to one texel); when those agree
+    // (the link wholly visible or wholly hidden, the usual case), their answer stands for
+    // every pair. Then the other pairs of the partial links, so a partial link costs one ray
+    // per pair as without probes. Last the links are summed in the order they were made.
+    // Each ray's answer is its own, so the bytes are those of tracing link by link.
+    void Resolve() {
+        const size_t probes_wanted = size_t(std::max(0, s_.opt_.link_probes));
+        auto probe_count = [&](const Deferred& d) {
+            return std::min(probes_wanted, (d.pair1 - d.pair0) / 2);
+        };
+        // Links with fewer than 2 probes trace every pair here.
+        probe_.Clear();
+        for (const Deferred& d : deferred_) {
+            if (d.vis >= 0)
+                continue;
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            if (probes < 2)
+                probe_.segments.insert(probe_.segments.end(), &batch_.segments[d.seg0],
+                                       &batch_.segments[d.seg0] + n);
+            else
+                for (size_t k = 0; k < probes; ++k)
+                    probe_.segments.push_back(batch_.segments[d.seg0 + ProbePair(k, n, probes)]);
+        }
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        // The partial links' other pairs; every pair's answer into batch_.occluded.
+        batch_.occluded.assign(batch_.size(), 0);
+        rest_.Clear();
+        std::vector<uint8_t> partial(deferred_.size(), 0);
+        for (size_t at = 0, i = 0; i < deferred_.size(); ++i) {
+            const Deferred& d = deferred_[i];
+            if (d.vis >= 0)
+                continue;
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            uint8_t* occ = &batch_.occluded[d.seg0];
+            if (probes < 2) {
+                std::copy(&probe_.occluded[at], &probe_.occluded[at] + n, occ);
+                at += n;
+                continue;
+            }
+            const size_t hidden = size_t(std::count(&probe_.occluded[at],
+                                                    &probe_.occluded[at] + probes, uint8_t(1)));
+            if (hidden == 0 || hidden == probes) {
+                std::fill(occ, occ + n, hidden == 0 ? 0 : 1);
+            } else {
+                partial[i] = 1;
+                for (size_t q = 0, k = 0; q < n; ++q) {
+                    if (k < probes && q == ProbePair(k, n, probes))
+                        occ[q] = probe_.occluded[at + k++];
+                    else
+                        rest_.segments.push_back(batch_.segments[d.seg0 + q]);
+                }
+            }
+            at += probes;
+        }
+        rest_.Trace(s_.vis_, RayKind::kLink);
+        for (size_t r = 0, i = 0; i < deferred_.size(); ++i) {
+            if (!partial[i])
+                continue;
+            const Deferred& d = deferred_[i];
+            const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
+            for (size_t q = 0, k = 0; q < n; ++q) {
+                if (k < probes && q == ProbePair(k, n, probes))
+                    ++k;
+                else
+                    batch_.occluded[d.seg0 + q] = rest_.occluded[r++];
+            }
+        }
+        for (const Deferred& d : deferred_)
+            SumLink(d);
+        deferred_.clear();
+        pairs_.clear();
+        batch_.Clear();
+        point_sets_.clear();
+        set_node_ = SIZE_MAX;
+    }
+
+    // A resolved link's light at its node's Gauss points, added to the node's sum.
+    void SumLink(const Deferred& d) {
+        const PointSet& ps = point_sets_[d.points];
+        e9_.assign(ps.pts.size() * 9, 0.f);
+        for (size_t q = d.pair0; q < d.pair1; ++q) {
+            if (d.vis < 0 && batch_.occluded[d.seg0 + (q - d.pair0)])
                 continue;
             const Pair& pr = pairs_[q];
-            const Vec3f db = vis < 0 ? texels[pr.texel].db : texels[pr.texel].db * vis;
+            const Vec3f& tdb = (*d.texels)[pr.texel].db;
+            const Vec3f db = d.vis < 0 ? tdb : tdb * d.vis;
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k)
                     e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
         }
-        ToFieldValues(pts_, albedo_, e9_, s_.opt_.settings.radiosity, &vals_);
-        float* acc = NodeValues(n);
+        ToFieldValues(ps.pts, ps.albedo, e9_, s_.opt_.settings.radiosity, &vals_);
+        float* acc = NodeValues(d.node);
         for (size_t k = 0; k < vals_.size(); ++k)
             acc[k] += vals_[k];
     }
 
 public:
-    // Projects every node's summed link values onto its pending coefficients (in the order
-    // the nodes were first linked) and empties the sums. The projection is linear, so once
+    // Resolves the links still deferred, then projects every node's summed link values onto
+    // its pending coefficients (in the order the nodes were first linked) and empties the sums. The projection is linear, so once
     // per node and gather instead of once per link (it was 10 % of lucy's solve).
     void Flush() {
+        Resolve();
+        FlushSums();
+    }
+
+private:
+    // Flush() of the sums alone (the links they hold are resolved).
+    void FlushSums() {
         for (size_t slot = 0; slot < slot_nodes_.size(); ++slot) {
             const uint32_t n = slot_nodes_[slot];
             ProjectGauss(order_, ng_, &node_values_[slot * values_per_node_], field_.blocks(),
@@ -494,7 +607,6 @@ public:
         node_values_.clear();
     }
 
-private:
     // The sum of node n's link values at its Gauss points (ToFieldValues' layout). At most
     // kMaxSlots nodes are summed at once (a bounded buffer: the order of the flushes
     // depends on the links alone, so the result does on no thread count).
@@ -503,46 +615,12 @@ private:
             node_slot_.resize(field_.node_count(), -1);
         if (node_slot_[n] < 0) {
             if (slot_nodes_.size() == kMaxSlots)
-                Flush();
+                FlushSums();
             node_slot_[n] = int32_t(slot_nodes_.size());
             slot_nodes_.push_back(uint32_t(n));
             node_values_.resize(slot_nodes_.size() * values_per_node_, 0.f);
         }
         return &node_values_[size_t(node_slot_[n]) * values_per_node_];
-    }
-
-    // Visibility of every pair of the link. A stratified subset of link_probes pairs (at
-    // most half of them: 4 of a 3 x 3-point link to one texel) is traced first: when those
-    // rays agree (the link wholly visible or wholly hidden, the usual case), their answer
-    // stands for every pair; only partial links trace the other pairs, keeping the probes'
-    // answers, so a partial link costs one ray per pair as without probes.
-    void TraceLink() {
-        const size_t n = pairs_.size();
-        const size_t probes = std::min(size_t(std::max(0, s_.opt_.link_probes)), n / 2);
-        if (probes < 2) {
-            batch_.Trace(s_.vis_, RayKind::kLink);
-            return;
-        }
-        const size_t hidden = TraceProbes(probes);
-        if (hidden == 0 || hidden == probes) {
-            batch_.occluded.assign(n, hidden == 0 ? 0 : 1);
-            return;
-        }
-        rest_.Clear();
-        for (size_t q = 0, k = 0; q < n; ++q) {
-            if (k < probes && q == ProbePair(k, n, probes))
-                ++k;
-            else
-                rest_.segments.push_back(batch_.segments[q]);
-        }
-        rest_.Trace(s_.vis_, RayKind::kLink);
-        batch_.occluded.resize(n);
-        for (size_t q = 0, k = 0, r = 0; q < n; ++q) {
-            if (k < probes && q == ProbePair(k, n, probes))
-                batch_.occluded[q] = probe_.occluded[k++];
-            else
-                batch_.occluded[q] = rest_.occluded[r++];
-        }
     }
 
     // Node n's Gauss points and albedo into pts_ and albedo_. The refinement comes back to
@@ -572,7 +650,7 @@ private:
 
     // The visibility of a link about to be split, for its whole subtree: k stratified probes
     // between the node's Gauss points and the region's texels that face each other (as
-    // TraceLink's, at most half the pairs; the texels one level below the region, or finer
+    // Resolve's, at most half the pairs; the texels one level below the region, or finer
     // when that gives too few pairs). All blocked: no link below it can carry light, and
     // the subtree is dropped; all free: its links are evaluated as wholly visible, without
     // rays; otherwise each link below traces its own. Smits' error estimate sets k: the
@@ -593,7 +671,7 @@ private:
         NodePoints(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        batch_.Clear();
+        split_.Clear();
         for (const ReceiverPoint& rp : pts_) {
             const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b)
@@ -603,39 +681,37 @@ private:
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                    split_.AddSegment(org, t.vis + t.nrm * eps_);
                 }
         }
-        const size_t n = batch_.size();
+        const size_t n = split_.size();
         const size_t probes = std::min(want, n / 2);
         if (probes < 2 || ratio > double(probes))
             return kVisUnknown;
-        const size_t hidden = TraceProbes(probes);
+        const size_t hidden = TraceProbes(split_, probes);
         return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
     }
 
-    // Probe k is segment ProbePair(k) of batch_'s n: increasing, and distinct as n >= 2
-    // probes. Traces them into probe_ and returns how many are blocked.
+    // Probe k of n segments is segment ProbePair(k): increasing, and distinct as n >= 2
+    // probes. TraceProbes traces those of `from` into probe_ and returns how many are blocked.
     static size_t ProbePair(size_t k, size_t n, size_t probes) {
         return (2 * k + 1) * n / (2 * probes);
     }
-    size_t TraceProbes(size_t probes) {
+    size_t TraceProbes(const SegmentBatch& from, size_t probes) {
         probe_.Clear();
         for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(batch_.segments[ProbePair(k, batch_.size(), probes)]);
+            probe_.segments.push_back(from.segments[ProbePair(k, from.size(), probes)]);
         probe_.Trace(s_.vis_, RayKind::kLink);
         return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
-    // transfer (transfer.h) and its visibility segment.
+    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_.
     void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
         const auto& texels = em.levels[size_t(ls)];
         const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
-        pairs_.clear();
-        batch_.Clear();
         RegionFacets(em, lk, ls);
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
@@ -707,7 +783,8 @@ private:
     const float eps_;
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
-    size_t pts_node_ = SIZE_MAX;  // the node pts_ and albedo_ belong to
+    size_t pts_node_ = SIZE_MAX;  // the node pts_ belongs to (NodePoints)
+    size_t set_node_ = SIZE_MAX;  // the node point_sets_.back() belongs to
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
@@ -716,12 +793,16 @@ private:
     std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX
     std::vector<ReceiverPoint> point_cache_;
     std::vector<Vec3f> albedo_cache_;
+    std::vector<PointSet> point_sets_;   // the deferred links' receiver points
+    std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
+    // Their pairs and segments (at most SolveOptions::link_defer_pairs, plus one link's): ~60 B
+    // a pair here and ~100 in the paged visibility, ~2.5 MB per gathering thread at 16K.
     std::vector<Pair> pairs_;
     std::vector<TexelSource> facets_;  // RegionFacets()
     std::vector<Vec3f> facet_vis_;
     size_t facet_count_ = 0;
     std::vector<float> e9_, vals_, coeffs_;
-    SegmentBatch batch_, probe_, rest_;
+    SegmentBatch batch_, probe_, rest_, split_;  // split_: SplitVisibility's own
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1

@@ -76,6 +76,9 @@ struct SolveOptions {
     // A link about to be split probes its visibility the same way first, and a subtree
     // whose probes agree takes their answer without rays (Gatherer::SplitVisibility).
     bool split_probes = true;
+    // A gather's link rays wait until this many (point, texel) pairs gather, then go to the
+    // visibility together (Gatherer::Resolve; 1: link by link). The same bytes for any value.
+    size_t link_defer_pairs = size_t(1) << 14;
     // --multi-emitter simplify: write each chart's classification and refinement as
     // DIR/chart-N.png here (multi_emitter_debug.h); empty: none.
     std::string multi_emitter_debug;

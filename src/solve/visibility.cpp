@@ -15,6 +15,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <xmmintrin.h>
 
 namespace mebake::solve {
@@ -138,7 +139,7 @@ RTCIntersectContextFlags ContextFlags(const VisibilityOptions& o) {
 constexpr float kNegInf = -std::numeric_limits<float>::infinity();
 constexpr size_t kChunk = 256;  // rays per stream call (on the stack: 256 * 48 bytes)
 
-inline void FillRay(const Segment& s, RTCRay* r) {
+inline void FillRay(const Segment& s, RTCRay* r, unsigned id = 0) {
     r->org_x = s.ox;
     r->org_y = s.oy;
     r->org_z = s.oz;
@@ -149,7 +150,7 @@ inline void FillRay(const Segment& s, RTCRay* r) {
     r->time = 0;
     r->tfar = s.tfar;
     r->mask = 0xFFFFFFFFu;  // masks are compiled in; mask 0 would miss everything
-    r->id = 0;
+    r->id = id;  // the ray's slot in TieContext
     r->flags = 0;
 }
 
@@ -172,6 +173,45 @@ inline Hit ToHit(const RTCRayHit& rh) {
     h.geom_id = rh.hit.geomID;
     h.prim_id = rh.hit.primID;
     return h;
+}
+
+// Closest hits with a fixed rule at equal distance: Embree commits every candidate hit
+// with t <= the ray's tfar, so where two triangles meet a ray at the same t (a shared edge
+// or vertex, as the direct light's rays along the normal often do) the one its traversal
+// met last would win, and that depends on the BVH, so on the scene's other triangles: a
+// paged piece's scene and the whole scene answered differently (the 16M sphere's solution
+// differed in 10K bytes, session 10). The geometries' intersect filter (LowestAtTies)
+// keeps, per ray, the lowest rank among the triangles at the least t: (geometry,
+// primitive) in a whole scene, the caller's global triangle ids in a paged piece.
+struct TieContext {
+    RTCIntersectContext ctx;       // first: the filter gets its address
+    const uint32_t* rank = nullptr;  // per primitive of geometry 0, or null: (geom, prim)
+    float t[kChunk];               // per ray id: the hit kept so far
+    uint64_t key[kChunk];
+    void Reset(size_t n) {
+        std::fill(t, t + n, std::numeric_limits<float>::infinity());
+        std::fill(key, key + n, ~uint64_t(0));
+    }
+};
+static_assert(std::is_standard_layout_v<TieContext>);
+
+void LowestAtTies(const RTCFilterFunctionNArguments* a) {
+    auto* c = reinterpret_cast<TieContext*>(a->context);
+    for (unsigned i = 0; i < a->N; ++i) {
+        if (a->valid[i] == 0)
+            continue;
+        const unsigned id = RTCRayN_id(a->ray, a->N, i);
+        const float t = RTCRayN_tfar(a->ray, a->N, i);  // the candidate's distance
+        const unsigned geom = RTCHitN_geomID(a->hit, a->N, i);
+        const unsigned prim = RTCHitN_primID(a->hit, a->N, i);
+        const uint64_t key = c->rank ? c->rank[prim] : uint64_t(geom) << 32 | prim;
+        if (t == c->t[id] && key > c->key[id]) {
+            a->valid[i] = 0;  // a lower-ranked triangle at the same distance stays
+            continue;
+        }
+        c->t[id] = t;  // t <= the kept hit's (Embree's range test)
+        c->key[id] = key;
+    }
 }
 
 // Packets: RTCRayN / RTCRayHitN of width W, filled lane by lane.
@@ -212,7 +252,7 @@ inline void FillLane(const Segment& s, int i, R* r) {
     r->time[i] = 0;
     r->tfar[i] = s.tfar;
     r->mask[i] = 0xFFFFFFFFu;
-    r->id[i] = 0;
+    r->id[i] = unsigned(i);
     r->flags[i] = 0;
 }
 
@@ -235,7 +275,7 @@ void OccludedPackets(RTCScene scene, RTCIntersectContext* ctx, std::span<const S
 }
 
 template <int W>
-void IntersectPackets(RTCScene scene, RTCIntersectContext* ctx, std::span<const Segment> seg,
+void IntersectPackets(RTCScene scene, TieContext* ctx, std::span<const Segment> seg,
                       std::span<Hit> out) {
     alignas(64) typename Packet<W>::RayHit rh;
     alignas(64) int valid[W];
@@ -248,7 +288,8 @@ void IntersectPackets(RTCScene scene, RTCIntersectContext* ctx, std::span<const 
             rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         }
-        Packet<W>::Intersect(valid, scene, ctx, &rh);
+        ctx->Reset(W);
+        Packet<W>::Intersect(valid, scene, &ctx->ctx, &rh);
         for (int i = 0; i < n; ++i) {
             Hit& h = out[base + i];
             h = Hit{};
@@ -341,6 +382,7 @@ uint32_t VisibilityScene::AddTriangles(std::span<const float> positions,
     }
     std::memcpy(v, positions.data(), positions.size_bytes());
     std::memcpy(t, indices.data(), indices.size_bytes());
+    rtcSetGeometryIntersectFilterFunction(geom, LowestAtTies);
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(impl_->scene, geom, id);
     rtcReleaseGeometry(geom);  // the scene holds it now
@@ -374,6 +416,7 @@ uint32_t VisibilityScene::AddTrianglesShared(std::span<const float> positions, s
                                0, 3 * sizeof(float), vertex_count);
     rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
                                3 * sizeof(uint32_t), nt);
+    rtcSetGeometryIntersectFilterFunction(geom, LowestAtTies);
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(impl_->scene, geom, id);
     rtcReleaseGeometry(geom);
@@ -458,10 +501,19 @@ void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit
     CHECK_EQ(segments.size(), hits.size());
     if (paged_)
         return paged_->Intersect(segments, hits);
+    IntersectRanked(segments, hits, {});
+}
+
+void VisibilityScene::IntersectRanked(std::span<const Segment> segments, std::span<Hit> hits,
+                                      std::span<const uint32_t> rank) const {
+    CHECK(committed_ && !paged_);
+    CHECK_EQ(segments.size(), hits.size());
+    CHECK(rank.empty() || (geometries_ == 1 && rank.size() == triangles_));
     FlushDenormals ftz;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = ContextFlags(options_);
+    TieContext tc;
+    rtcInitIntersectContext(&tc.ctx);
+    tc.ctx.flags = ContextFlags(options_);
+    tc.rank = rank.empty() ? nullptr : rank.data();
     RTCScene scene = impl_->scene;
     switch (options_.method) {
     case TraceMethod::kStream: {
@@ -469,27 +521,29 @@ void VisibilityScene::Intersect(std::span<const Segment> segments, std::span<Hit
         for (size_t base = 0; base < segments.size(); base += kChunk) {
             const size_t n = std::min(kChunk, segments.size() - base);
             for (size_t i = 0; i < n; ++i) {
-                FillRay(segments[base + i], &rays[i].ray);
+                FillRay(segments[base + i], &rays[i].ray, unsigned(i));
                 InitHit(&rays[i].hit);
             }
-            rtcIntersect1M(scene, &ctx, rays, unsigned(n), sizeof(RTCRayHit));
+            tc.Reset(n);
+            rtcIntersect1M(scene, &tc.ctx, rays, unsigned(n), sizeof(RTCRayHit));
             for (size_t i = 0; i < n; ++i)
                 hits[base + i] = ToHit(rays[i]);
         }
         break;
     }
     case TraceMethod::kPacket16:
-        IntersectPackets<16>(scene, &ctx, segments, hits);
+        IntersectPackets<16>(scene, &tc, segments, hits);
         break;
     case TraceMethod::kPacket8:
-        IntersectPackets<8>(scene, &ctx, segments, hits);
+        IntersectPackets<8>(scene, &tc, segments, hits);
         break;
     case TraceMethod::kSingle: {
         RTCRayHit rh;
         for (size_t i = 0; i < segments.size(); ++i) {
             FillRay(segments[i], &rh.ray);
             InitHit(&rh.hit);
-            rtcIntersect1(scene, &ctx, &rh);
+            tc.Reset(1);
+            rtcIntersect1(scene, &tc.ctx, &rh);
             hits[i] = ToHit(rh);
         }
         break;

@@ -13,8 +13,9 @@
 // - a memory monitor counts Embree's bytes (EmbreeMemoryBytes) and can cap them
 //   (SetEmbreeMemoryLimit): a build over the limit throws instead of eating memory.
 // Queries are thread-safe after Commit() and deterministic: each segment's answer depends on
-// that segment only (occlusion is exact per ray; closest hit ties between triangles at the
-// same distance, e.g. a shared edge, may resolve to either).
+// that segment only (occlusion is exact per ray; a closest hit met at the same distance by
+// several triangles, e.g. on a shared edge, is the one of lowest (geometry, primitive), so
+// it does not depend on the BVH either).
 #pragma once
 
 #include <cstddef>
@@ -103,8 +104,13 @@ public:
     // Same, parallel over chunks of the batch through core/parallel.h.
     void OccludedParallel(std::span<const Segment> segments, std::span<uint8_t> occluded) const;
 
-    // Closest hit in [tnear, tfar] per segment. Thread-safe after Commit.
+    // Closest hit in [tnear, tfar] per segment; at equal t the lowest (geometry, primitive).
+    // Thread-safe after Commit.
     void Intersect(std::span<const Segment> segments, std::span<Hit> hits) const;
+    // The same for a scene of one geometry (not paged), ties going to the lowest
+    // rank[primitive] instead (a paged piece's global triangle ids); empty rank: Intersect.
+    void IntersectRanked(std::span<const Segment> segments, std::span<Hit> hits,
+                         std::span<const uint32_t> rank) const;
 
     uint64_t triangle_count() const { return triangles_; }
     const VisibilityOptions& options() const { return options_; }

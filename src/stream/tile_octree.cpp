@@ -125,40 +125,51 @@ std::vector<uint32_t> TriangleOctree::Leaves() const {
     return out;
 }
 
-bool SegmentMayCrossBox(const Vec3f& o, const Vec3f& d, float t0, float t1, const Vec3f& lo,
-                        const Vec3f& hi) {
-    // In double, on a box widened by 1e-4 of its size plus 1e-6 of its distance from the
-    // origin: Embree's watertight test may report a hit a few ulps outside a triangle.
+// In double, on a box widened by 1e-4 of its size plus 1e-6 of its distance from the
+// origin: Embree's watertight test may report a hit a few ulps outside a triangle.
+WideBox WidenBox(const Vec3f& lo, const Vec3f& hi) {
     const double ext = std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z});
     const double far = std::max({std::fabs(double(lo.x)), std::fabs(double(lo.y)),
                                  std::fabs(double(lo.z)), std::fabs(double(hi.x)),
                                  std::fabs(double(hi.y)), std::fabs(double(hi.z))});
     const double margin = 1e-4 * ext + 1e-6 * far + 1e-30;
-    double tmin = double(t0), tmax = double(t1);
-    if (!(tmin <= tmax))
-        return !(tmin > tmax);  // a NaN bound: let the tracer decide
-    tmin -= 1e-6 * std::fabs(tmin);
-    tmax += 1e-6 * std::fabs(tmax);
-    const double org[3] = {o.x, o.y, o.z}, dir[3] = {d.x, d.y, d.z};
-    const double blo[3] = {lo.x - margin, lo.y - margin, lo.z - margin};
-    const double bhi[3] = {hi.x + margin, hi.y + margin, hi.z + margin};
-    for (int a = 0; a < 3; ++a) {
-        if (!std::isfinite(org[a]) || !std::isfinite(dir[a]))
-            return true;
-        if (dir[a] == 0) {
-            if (org[a] < blo[a] || org[a] > bhi[a])
-                return false;
-            continue;
-        }
-        double ta = (blo[a] - org[a]) / dir[a], tb = (bhi[a] - org[a]) / dir[a];
-        if (ta > tb)
-            std::swap(ta, tb);
-        tmin = std::max(tmin, ta);
-        tmax = std::min(tmax, tb);
-        if (tmin > tmax)
-            return false;
+    return WideBox{{lo.x - margin, lo.y - margin, lo.z - margin},
+                   {hi.x + margin, hi.y + margin, hi.z + margin}};
+}
+
+SegmentProbe PrepareSegment(const Vec3f& o, const Vec3f& d, float t0, float t1) {
+    SegmentProbe s{};
+    s.fixed = -1;
+    s.tmin = double(t0);
+    s.tmax = double(t1);
+    if (!(s.tmin <= s.tmax)) {
+        s.fixed = s.tmin > s.tmax ? 0 : 1;  // a NaN bound: let the tracer decide
+        return s;
     }
-    return true;
+    s.tmin -= 1e-6 * std::fabs(s.tmin);
+    s.tmax += 1e-6 * std::fabs(s.tmax);
+    const float org[3] = {o.x, o.y, o.z}, dir[3] = {d.x, d.y, d.z};
+    for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(org[a]) || !std::isfinite(dir[a])) {
+            s.fixed = 1;
+            return s;
+        }
+        s.org[a] = org[a];
+        s.flat[a] = dir[a] == 0;
+        s.inv[a] = s.flat[a] ? 0 : 1.0 / double(dir[a]);
+    }
+    return s;
+}
+
+bool SegmentMayCrossBox(const Vec3f& o, const Vec3f& d, float t0, float t1, const Vec3f& lo,
+                        const Vec3f& hi) {
+    return MayCross(PrepareSegment(o, d, t0, t1), WidenBox(lo, hi));
+}
+
+OctreeRouter::OctreeRouter(const TriangleOctree& tree) : tree_(&tree) {
+    boxes_.reserve(tree.nodes.size());
+    for (const OctreeNode& n : tree.nodes)
+        boxes_.push_back(WidenBox(n.lo, n.hi));
 }
 
 void CheckTriangleOctree(const TriangleOctree& tree, size_t triangle_count, const char* file) {

@@ -141,13 +141,15 @@ struct BoxRun {
 
 BoxRun SolveBox(double link_tolerance, bool block = false,
                int link_probes = SolveOptions{}.link_probes,
-               bool split_probes = SolveOptions{}.split_probes) {
+               bool split_probes = SolveOptions{}.split_probes,
+               size_t link_defer_pairs = SolveOptions{}.link_defer_pairs) {
     testing::LitBox box(5, 32, block);
     SolveOptions opt;
     opt.settings.max_bounces = 8;
     opt.link_tolerance = link_tolerance;
     opt.link_probes = link_probes;
     opt.split_probes = split_probes;
+    opt.link_defer_pairs = link_defer_pairs;
     Solver solver(box.scene, box.charts, box.vis, opt);
     solver.Run();
     BoxRun r;
@@ -245,6 +247,24 @@ TEST(LinkRefine, SplitProbesKeepTheShadowWithFewerRays) {
     EXPECT_LT(worst, 0.01);
     EXPECT_LT(mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) / 2);  // measured: 0.38
+}
+
+// The gathers' deferred link rays (solver.cpp, Gatherer::Resolve): the same values, bit
+// for bit, as tracing link by link (1 pair), with link probes and without, whatever the
+// batch; it fails if a deferred link reads another link's answers.
+TEST(LinkRefine, DeferredLinkRaysGiveTheBytesOfLinkByLink) {
+    const double tol = SolveOptions{}.link_tolerance;
+    for (int probes : {8, 0}) {
+        const BoxRun one = SolveBox(tol, true, probes, SolveOptions{}.split_probes, 1);
+        EXPECT_GT(LinkRays(one.stats), 0u);
+        for (size_t defer : {size_t(37), SolveOptions{}.link_defer_pairs}) {
+            const BoxRun many = SolveBox(tol, true, probes, SolveOptions{}.split_probes, defer);
+            ASSERT_EQ(many.e.size(), one.e.size());
+            EXPECT_EQ(std::memcmp(many.e.data(), one.e.data(), one.e.size() * sizeof(double)), 0)
+                << "probes " << probes << ", " << defer << " pairs";
+            EXPECT_EQ(LinkRays(many.stats), LinkRays(one.stats));
+        }
+    }
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {

@@ -89,6 +89,7 @@ TEST(TileOctree, EveryTriangleInOneLeafInsideItsBox) {
 TEST(TileOctree, SegmentQueryVisitsEveryLeafOfACrossedTriangle) {
     const Mesh m = Sphere(30);
     const TriangleOctree tree = BuildTriangleOctree(m.p, m.t, {8, 12});
+    const OctreeRouter router(tree);
     std::vector<uint32_t> leaf_of(m.t.size());
     for (uint32_t leaf : tree.Leaves())
         for (uint32_t k = tree.nodes[leaf].first; k < tree.nodes[leaf].first + tree.nodes[leaf].count;
@@ -103,7 +104,7 @@ TEST(TileOctree, SegmentQueryVisitsEveryLeafOfACrossedTriangle) {
         const Vec3f dd = s % 7 == 0 ? Vec3f(0, 0, d.z) : d;
         const Vec3f oo = s % 11 == 0 ? m.p[size_t(s) % m.p.size()] - dd * 0.5f : o;
         std::vector<uint8_t> seen(tree.nodes.size(), 0);
-        tree.ForEachLeafOnSegment(oo, dd, 0, 1, [&](uint32_t leaf) {
+        router.ForEachLeafOnSegment(oo, dd, 0, 1, [&](uint32_t leaf) {
             seen[leaf] = 1;
             ++visited;
         });
