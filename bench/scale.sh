@@ -4,7 +4,7 @@
 # `mebake export` (light map + stats), each under /usr/bin/time -v.
 #
 #   bash bench/scale.sh [--sizes "100000 1000000 ..."] [--memory 2G] [--timeout S] [--work DIR]
-#                       [--no-results] [--stages "ingest solve export"] [--keep]
+#                       [--no-results] [--stages "ingest solve export"] [--keep] [--plot FILE]
 #
 # --stages runs only those stages (a size whose ingest is not among them reuses WORK/sN.mebake
 # from an earlier --keep run, so a long ingest and solve need not be repeated to re-measure
@@ -16,7 +16,8 @@
 # Each stage runs under `nice -n 5` and `timeout S` (default 7200 s); a stage that times out
 # is recorded as such (and the later stages of that size are skipped).
 #
-# Writes WORK/scale.tsv, WORK/scale.md, bench/scale.png (log-log; skipped without gnuplot)
+# Writes WORK/scale.tsv, WORK/scale.md, the plot (log-log; --plot, default bench/scale.png;
+# skipped without gnuplot)
 # and the table into bench/RESULTS.md between the "scale:begin/end" markers.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -29,6 +30,7 @@ TIMEOUT=7200
 MEMORY=()
 STAGES="ingest solve export"
 KEEP=0
+PLOT="$ROOT/bench/scale.png"
 CMD="bash bench/scale.sh$(printf " %q" "$@")"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -39,6 +41,7 @@ while [ $# -gt 0 ]; do
     --no-results) RESULTS=0; shift ;;
     --stages) STAGES="$2"; shift 2 ;;
     --keep) KEEP=1; shift ;;
+    --plot) PLOT="$(realpath -m "$2")"; shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -150,7 +153,7 @@ if command -v gnuplot > /dev/null; then
   done
   gnuplot <<GP
 set terminal pngcairo size 1100,480 noenhanced
-set output "$ROOT/bench/scale.png"
+set output "$PLOT"
 set multiplot layout 1,2 title "mebake scale (mkscan sphere, default rig; 2-core machine)"
 set logscale xy
 set grid
@@ -162,18 +165,18 @@ set title "CPU time, user + sys (s)"
 plot "$WORK/ingest.dat" u 1:4 w lp t "ingest", "$WORK/solve.dat" u 1:4 w lp t "solve", "$WORK/export.dat" u 1:4 w lp t "export", x/1e5 w l dt 2 t "linear"
 unset multiplot
 GP
-  echo "wrote bench/scale.png" >&2
+  echo "wrote $PLOT" >&2
 else
   echo "gnuplot not installed: no plot (apt-get install gnuplot-nox)" >&2
 fi
 
 if [ "$RESULTS" = 1 ]; then
-  python3 - "$ROOT/bench/RESULTS.md" "$WORK/scale.md" scale <<'PY'
+  python3 - "$ROOT/bench/RESULTS.md" "$WORK/scale.md" scale "$(basename "$PLOT")" <<'PY'
 import sys
-path, table, key = sys.argv[1], open(sys.argv[2]).read(), sys.argv[3]
+path, table, key, plot = sys.argv[1], open(sys.argv[2]).read(), sys.argv[3], sys.argv[4]
 b, e = "<!-- %s:begin -->" % key, "<!-- %s:end -->" % key
 s = open(path).read()
-block = "%s\n%s%s" % (b, table + "\n![scale](scale.png)\n", e)
+block = "%s\n%s%s" % (b, table + "\n![scale](%s)\n" % plot, e)
 if b in s and e in s:
     s = s[:s.index(b)] + block + s[s.index(e) + len(e):]
 else:

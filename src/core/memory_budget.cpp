@@ -37,7 +37,7 @@ uint64_t MemoryBudget::ExportCache() const {
 }
 
 uint64_t MemoryBudget::StitchCache() const {
-    return std::min<uint64_t>(total_ / 16, 16 * kMiB);
+    return std::min<uint64_t>(total_ / 16, 4 * kMiB);
 }
 
 std::vector<MemoryShare> MemoryBudget::Shares() const {
@@ -49,7 +49,7 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"solve.geometry_pyramids", GeometryPyramids(), "1/32 beyond pinned charts"},
             {"solve.coefficient_pools", CoefficientPools(), "min(1/16, 64 MiB) beyond pinned charts"},
             {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"},
-            {"export.stitch_cache", StitchCache(), "min(1/16, 16 MiB)"}};
+            {"export.stitch_cache", StitchCache(), "min(1/16, 4 MiB)"}};
 }
 
 }  // namespace mebake

@@ -59,8 +59,11 @@ public:
     uint64_t ExportCache() const;
     // Export and render: the sampled chart borders kept between charts' stitch data
     // (seam_graph.h; each chart's is rebuilt from its neighbourhood, so a miss costs a
-    // tile read, never bytes). A fixed cap: more than a few hundred charts' borders buy
-    // little, since charts ask for their neighbours in chart order.
+    // tile read, never bytes). A fixed cap: charts ask for their neighbours in chart order,
+    // so a few hundred charts' borders hold the reuse (16M sphere: 4 MiB misses 1159 of
+    // 4104 requests, 16 MiB 786, for 2 CPU-s of 25), and a larger cap only fills on big
+    // meshes, which made the export's peak grow with the mesh (bench/RESULTS.md, issue 16
+    // session 10).
     uint64_t StitchCache() const;
 
     std::vector<MemoryShare> Shares() const;

@@ -35,15 +35,19 @@ struct Side {
     uint32_t v0 = 0, v1 = 0;  // the tile's vertices of g0 and g1
     Vec3f n0, n1;             // their shading normals
     uint32_t intervals = 0;   // samples at t = k / intervals, k = 0..intervals
-    std::vector<float> vals;  // (intervals + 1) x blocks
+    const float* vals = nullptr;  // (intervals + 1) x blocks, in its Sides' vals
 };
 
 }  // namespace
 
 struct SeamStitcher::Sides {
+    Sides() = default;
+    Sides(Sides&&) = default;  // moves keep vals' buffer, so the sides' pointers stay valid
+    Sides(const Sides&) = delete;
     std::vector<Key> keys;  // in the order of OutlineEdges
     std::vector<Side> sides;
-    size_t bytes = 0;  // what it holds, roughly
+    std::vector<float> vals;  // every side's samples, one block: no allocation per side
+    size_t bytes = 0;         // what its arrays hold, as allocated (the LRU's measure)
 };
 
 namespace {
@@ -57,6 +61,7 @@ ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile
     const double res = double(std::max<uint32_t>(1, tile.meta.resolution));
     const ContinuousField shown(*field, 1.0 / res);
     const double texel = view.manifest.texel_size;
+    std::vector<size_t> firsts;  // each side's first sample in out.vals
     for (const OutlineEdge& e : OutlineEdges(tile, view.manifest.vertex_count)) {
         Side s;
         s.chart = c;
@@ -75,16 +80,24 @@ ChartSides SampleSides(const BakeView& view, uint32_t c, const stream::ChartTile
         double ls, lt;
         const double leaf = field->node(field->LeafAt(mid.x, mid.y, &ls, &lt)).size();
         s.band = float(std::clamp(0.5 * leaf, kMinBandTexels / res, kMaxBandTexels / res));
-        s.vals.resize(size_t(s.intervals + 1) * size_t(blocks));
+        const size_t first = out.vals.size();
+        out.vals.resize(first + size_t(s.intervals + 1) * size_t(blocks));
         for (uint32_t k = 0; k <= s.intervals; ++k) {
             const double t = double(k) / double(s.intervals);
             shown.Eval(s.a.x + t * (s.b.x - s.a.x), s.a.y + t * (s.b.y - s.a.y),
-                       &s.vals[size_t(k) * size_t(blocks)]);
+                       &out.vals[first + size_t(k) * size_t(blocks)]);
         }
-        out.bytes += sizeof(Key) + sizeof(Side) + s.vals.size() * sizeof(float);
+        firsts.push_back(first);  // pointed at once vals stops growing
         out.keys.push_back({e.g0, e.g1});
-        out.sides.push_back(std::move(s));
+        out.sides.push_back(s);
     }
+    out.keys.shrink_to_fit();
+    out.sides.shrink_to_fit();
+    out.vals.shrink_to_fit();
+    for (size_t i = 0; i < out.sides.size(); ++i)
+        out.sides[i].vals = out.vals.data() + firsts[i];
+    out.bytes = out.keys.capacity() * sizeof(Key) + out.sides.capacity() * sizeof(Side) +
+                out.vals.capacity() * sizeof(float);
     return out;
 }
 
@@ -486,7 +499,7 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
         e.first = uint32_t(targets.size() / size_t(blocks));
         e.count = s.intervals + 1;
         if (p.crease) {
-            targets.insert(targets.end(), s.vals.begin(), s.vals.end());
+            targets.insert(targets.end(), s.vals, s.vals + size_t(e.count) * size_t(blocks));
             edges.push_back(e);
             continue;
         }

@@ -1,6 +1,7 @@
 #include "output/texel_stitch.h"
 
 #include "core/check.h"
+#include "core/paged_file.h"
 #include "output/seam_graph.h"
 
 #include <algorithm>
@@ -96,41 +97,67 @@ ChartPart PrepareChart(const BakeView& view, const Atlas& atlas, uint32_t c,
 }
 
 // Rows of A: 8 (unknown, weight) entries per seam sample, side y's weights negated; the
-// weights are kept as the two footprints' (ax, ay) (32 bytes a row, not 64) and made again
-// when used, the same doubles.
-struct SeamRows {
-    std::vector<uint32_t> index;  // 8 per row
-    std::vector<double> frac;     // 4 per row: x's ax, ay, y's ax, ay
-    size_t rows() const { return index.size() / 8; }
-    void Add(const std::array<uint32_t, 8>& idx, const Footprint& fx, const Footprint& fy) {
-        index.insert(index.end(), idx.begin(), idx.end());
-        frac.insert(frac.end(), {fx.ax, fx.ay, fy.ax, fy.ay});
-    }
-    std::array<double, 8> Weights(size_t r) const {
-        const std::array<double, 4> wx = BilinearWeights(frac[4 * r], frac[4 * r + 1]);
-        const std::array<double, 4> wy = BilinearWeights(frac[4 * r + 2], frac[4 * r + 3]);
+// weights are kept as the two footprints' (ax, ay) (64 bytes a row, not 96) and made again
+// when used, the same doubles. The rows live in a temporary file behind a small page cache
+// (core/paged_file.h) and every pass reads them in order a block at a time: they are the
+// stitch's largest part (46 MB at 50M triangles), and a small export never writes the file.
+struct SeamRow {
+    uint32_t index[8];
+    double frac[4];  // x's ax, ay, y's ax, ay
+    std::array<double, 8> Weights() const {
+        const std::array<double, 4> wx = BilinearWeights(frac[0], frac[1]);
+        const std::array<double, 4> wy = BilinearWeights(frac[2], frac[3]);
         return {wx[0], wx[1], wx[2], wx[3], -wy[0], -wy[1], -wy[2], -wy[3]};
     }
 };
 
+class SeamRows {
+public:
+    SeamRows() : file_(PagedFile::Temporary{{}, "texel stitch rows"}, kRowCacheBytes) {}
+    uint64_t rows() const { return file_.size(); }
+    void Add(const std::array<uint32_t, 8>& idx, const Footprint& fx, const Footprint& fy) {
+        SeamRow r;
+        std::copy(idx.begin(), idx.end(), r.index);
+        r.frac[0] = fx.ax, r.frac[1] = fx.ay, r.frac[2] = fy.ax, r.frac[3] = fy.ay;
+        file_.Push(r);
+    }
+    // f(row) for every row in order.
+    template <typename F>
+    void ForEach(F&& f) {
+        const uint64_t n = rows();
+        block_.resize(size_t(std::min<uint64_t>(n, kBlockRows)));
+        for (uint64_t first = 0; first < n; first += kBlockRows) {
+            const size_t count = size_t(std::min<uint64_t>(kBlockRows, n - first));
+            file_.file().Read(first * sizeof(SeamRow), block_.data(), count * sizeof(SeamRow));
+            for (size_t k = 0; k < count; ++k)
+                f(block_[k]);
+        }
+    }
+
+private:
+    static constexpr size_t kRowCacheBytes = size_t(4) << 20;
+    static constexpr uint64_t kBlockRows = 4096;  // 256 KiB
+    DiskArray<SeamRow> file_;
+    std::vector<SeamRow> block_;
+};
+
 // y = (I + lambda A^T A) x.
-void ApplyNormal(const SeamRows& a, const std::vector<double>& x, std::vector<double>& y) {
+void ApplyNormal(SeamRows& a, const std::vector<double>& x, std::vector<double>& y) {
     y = x;
-    for (size_t r = 0; r < a.rows(); ++r) {
-        const std::array<double, 8> w = a.Weights(r);
-        const uint32_t* idx = &a.index[8 * r];
+    a.ForEach([&](const SeamRow& row) {
+        const std::array<double, 8> w = row.Weights();
         double ax = 0;
         for (size_t k = 0; k < 8; ++k)
-            ax += w[k] * x[idx[k]];
+            ax += w[k] * x[row.index[k]];
         for (size_t k = 0; k < 8; ++k)
-            y[idx[k]] += kSeamWeight * w[k] * ax;
-    }
+            y[row.index[k]] += kSeamWeight * w[k] * ax;
+    });
 }
 
 // Preconditioned conjugate gradients for (I + lambda A^T A) x = b from x = b, in place (x
 // holds b on entry); returns the iterations. The preconditioned residual z = r / diag is
 // made where it is used, not stored.
-int SolveChannel(const SeamRows& a, const std::vector<double>& diag, std::vector<double>& x) {
+int SolveChannel(SeamRows& a, const std::vector<double>& diag, std::vector<double>& x) {
     const size_t n = x.size();
     std::vector<double> r(n), p(n), q(n);
     ApplyNormal(a, x, q);
@@ -170,15 +197,15 @@ int SolveChannel(const SeamRows& a, const std::vector<double>& diag, std::vector
     return it;
 }
 
-double MismatchSquares(const SeamRows& a, const std::vector<double>& x) {
+double MismatchSquares(SeamRows& a, const std::vector<double>& x) {
     double sum = 0;
-    for (size_t r = 0; r < a.rows(); ++r) {
-        const std::array<double, 8> w = a.Weights(r);
+    a.ForEach([&](const SeamRow& row) {
+        const std::array<double, 8> w = row.Weights();
         double ax = 0;
         for (size_t k = 0; k < 8; ++k)
-            ax += w[k] * x[a.index[8 * r + k]];
+            ax += w[k] * x[row.index[k]];
         sum += ax * ax;
-    }
+    });
     return sum;
 }
 
@@ -253,17 +280,17 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
         });
     const size_t n = st.values_.size() / nc;
     std::vector<double> diag(n, 1.0);
-    for (size_t r = 0; r < rows.rows(); ++r) {
-        const std::array<double, 8> w = rows.Weights(r);
+    rows.ForEach([&](const SeamRow& row) {
+        const std::array<double, 8> w = row.Weights();
         for (size_t k = 0; k < 8; ++k)
-            diag[rows.index[8 * r + k]] += kSeamWeight * w[k] * w[k];
-    }
+            diag[row.index[k]] += kSeamWeight * w[k] * w[k];
+    });
     TexelStitchStats s;
     s.texels = n;
     s.samples = rows.rows();
     double before = 0, after = 0;
     std::vector<double> x(n);
-    for (size_t ch = 0; ch < solved && !rows.index.empty(); ++ch) {
+    for (size_t ch = 0; ch < solved && rows.rows() > 0; ++ch) {
         for (size_t i = 0; i < n; ++i)
             x[i] = st.values_[i * nc + ch];
         before += MismatchSquares(rows, x);

@@ -15,8 +15,9 @@
 // edge (p_A, p_B the same surface point in both charts). The normal equations
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
-// memory grows with the seams' texels and samples, not with the map (per texel 4 bytes of
-// index, its channels as floats and 5 doubles of CG; per sample 64 bytes; the sides
+// memory grows with the seams' texels, not with the map (per texel 4 bytes of index, its
+// channels as floats and 5 doubles of CG; the samples, 64 bytes each, in a temporary file
+// read in order a block at a time behind a 4 MiB page cache; the sides
 // waiting for their pair only while a neighbouring chart can still come, seam_graph.h's
 // BorderPairing). The global CG is kept (one system, not one per seam component) so the
 // texels are the same bytes as before. Single-threaded and

@@ -301,9 +301,15 @@ Manifest Ingest(const IngestOptions& opt) {
                        : std::sqrt(texel_area / (0.5 * double(opt.lightmap_resolution) *
                                                  opt.lightmap_resolution));
     m.timings.emplace_back("bricks", Since(t1));
-    spdlog::info("{} bricks of up to {} triangles, texel size {:.4g}, in {} (peak memory {})",
-                 plan.bricks.size(), FormatCount(double(bopt.max_faces)), m.texel_size,
-                 FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
+    uint64_t largest = 0;
+    for (const BrickInfo& b : plan.bricks)
+        largest = std::max(largest, b.face_count);
+    spdlog::info(
+        "{} bricks of up to {} triangles (largest {}, mean {}), texel size {:.4g}, in {} (peak "
+        "memory {})",
+        plan.bricks.size(), FormatCount(double(bopt.max_faces)), FormatCount(double(largest)),
+        FormatCount(double(sr.face_count) / double(std::max<size_t>(plan.bricks.size(), 1))),
+        m.texel_size, FormatSeconds(Since(t1)), FormatBytes(PeakRssBytes()));
 
     // Pass 2b: components wound inwards turned outwards (orient.h).
     if (opt.orient) {
