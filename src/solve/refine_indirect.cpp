@@ -60,8 +60,7 @@ public:
                                size_e / dist <= s_.opt_.emitter_tau;
             if (small || bound < negligible_ || (!emit_can && size_r <= size_e))
                 continue;
-            const float lum = (et.db.x + et.db.y + et.db.z) / 3;
-            const double b = ConeLinkBound(et.db_max, lum * et.area, leaf,
+            const double b = ConeLinkBound(et.db_max, Luminance(et.db) * et.area, leaf,
                                            {et.hull, et.hull_radius, {et.nrm, et.cone}});
             if (b <= allowed)
                 continue;  // accepted, or the sides face away
@@ -90,17 +89,8 @@ private:
     // geometry texels two levels below it (or the finest) inside it, kept in points_.
     LinkSide Shape(const QuadNode& node) {
         LinkSide side;
+        NodeSphere(sc_, node, &side.center, &side.radius);
         const int level = int(node.level);
-        if (level <= finest_) {
-            const auto& g = sc_.geometry.At(node.level, node.i, node.j);
-            side.center = g.position;
-            side.radius = g.radius;
-        } else {
-            auto smp = SampleBilinear(sc_.geometry, finest_, float(node.U(0.5)),
-                                      float(node.V(0.5)));
-            side.center = smp.position;
-            side.radius = float(sc_.scale * node.size() * 0.75);
-        }
         const int gl = std::min(finest_, level + 2);
         // A node finer than the finest level reads the one texel holding it.
         const int shift = std::max(0, gl - level);

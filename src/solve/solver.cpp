@@ -29,10 +29,6 @@ double Since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-float Luminance(const Vec3f& c) {
-    return (c.x + c.y + c.z) / 3;
-}
-
 }  // namespace
 
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
@@ -312,7 +308,7 @@ public:
                 continue;
             Vec3f rc;
             float rr;
-            NodeBounds(node, &rc, &rr);
+            NodeSphere(sc_, node, &rc, &rr);
             const double dist = double(Length(rc - et.pos)) - rr - et.radius;
             const double size_r = sc_.scale * node.size();
             const double size_e = em.scale / double(1u << lk.level);
@@ -392,7 +388,7 @@ private:
     // of the square's edge are extrapolated (weights in [-0.5, 1.5] per axis: the sum of
     // |weights| is at most 4, so the blend's tangent part grows to 4 sin theta against an
     // axial part of at least 2.5 cos theta - 1.5); and a sphere around the node's real
-    // points and the ring's sample points, when tighter than NodeBounds()'.
+    // points and the ring's sample points, when tighter than NodeSphere()'s.
     const LinkSide& NodeShape(size_t n) {
         if (node_shapes_.size() != field_.node_count())
             node_shapes_.assign(field_.node_count(), LinkSide{Vec3f{}, -1.f, {}});
@@ -400,7 +396,7 @@ private:
         if (cached.radius >= 0)
             return cached;
         const QuadNode node = field_.node(n);
-        NodeBounds(node, &cached.center, &cached.radius);
+        NodeSphere(sc_, node, &cached.center, &cached.radius);
         const int gl = std::min(std::max(std::min(finest_, int(node.level) + 2), 1), finest_);
         const int nn = 1 << gl;
         auto range = [&](double lo, double hi, int* a, int* b) {
@@ -446,19 +442,6 @@ private:
                              {et.hull, et.hull_radius, {et.nrm, et.cone}});
     }
 
-    // Receiver node bounds from the geometry pyramid.
-    void NodeBounds(const QuadNode& node, Vec3f* center, float* radius) const {
-        if (int(node.level) <= finest_) {
-            const auto& g = sc_.geometry.At(node.level, node.i, node.j);
-            *center = g.position;
-            *radius = g.radius;
-        } else {
-            auto smp =
-                SampleBilinear(sc_.geometry, finest_, float(node.U(0.5)), float(node.V(0.5)));
-            *center = smp.position;
-            *radius = float(sc_.scale * node.size() * 0.75);
-        }
-    }
 
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
@@ -584,8 +567,9 @@ private:
 
 public:
     // Resolves the links still deferred, then projects every node's summed link values onto
-    // its pending coefficients (in the order the nodes were first linked) and empties the sums. The projection is linear, so once
-    // per node and gather instead of once per link (it was 10 % of lucy's solve).
+    // its pending coefficients (in the order the nodes were first linked) and empties the
+    // sums. The projection is linear, so once per node and gather instead of once per link
+    // (it was 10 % of lucy's solve).
     void Flush() {
         Resolve();
         FlushSums();
@@ -726,15 +710,17 @@ private:
                     Vec3d contrib;
                     int carrier;
                     if (!FacetedTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area},
-                                         Facets(f0), texel_side,
-                                         &contrib, &carrier))
+                                         Facets(f0), texel_side, &contrib, &carrier))
                         continue;
                     pairs_.push_back({p, k, Vec3f(contrib)});
-                    if (rays)
-                        batch_.AddSegment(org, carrier < 0 ? t.vis + t.nrm * eps_
-                                                           : facet_vis_[f0 + size_t(carrier)] +
-                                                                 facets_[f0 + size_t(carrier)].nrm *
-                                                                     eps_);
+                    if (!rays)
+                        continue;
+                    if (carrier < 0) {
+                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                    } else {
+                        const size_t f = f0 + size_t(carrier);
+                        batch_.AddSegment(org, facet_vis_[f] + facets_[f].nrm * eps_);
+                    }
                 }
             }
         }
@@ -809,6 +795,20 @@ private:
     std::vector<uint32_t> slot_nodes_;
     std::vector<float> node_values_;
 };
+
+void Solver::NodeSphere(const SolveChart& sc, const QuadNode& node, Vec3f* center,
+                        float* radius) {
+    const int finest = sc.geometry.finest_level();
+    if (int(node.level) <= finest) {
+        const auto& g = sc.geometry.At(node.level, node.i, node.j);
+        *center = g.position;
+        *radius = g.radius;
+    } else {
+        auto smp = SampleBilinear(sc.geometry, finest, float(node.U(0.5)), float(node.V(0.5)));
+        *center = smp.position;
+        *radius = float(sc.scale * node.size() * 0.75);
+    }
+}
 
 double Solver::ReceiverTau() const {
     // A constant (M0) receiver node holds one E for its whole area, while the E of a

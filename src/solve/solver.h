@@ -214,6 +214,12 @@ private:
     double UnshotPower(uint32_t chart, bool first_shot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
+    // A quadtree node's bounding sphere, from the chart's geometry pyramid (the links' and
+    // the bounce refinement's distance test).
+    static void NodeSphere(const SolveChart& sc, const QuadNode& node, Vec3f* center,
+                           float* radius);
+    // The solver's scalar of a colour: the mean of its channels.
+    static float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
     size_t NodeBudget(const SolveChart& sc) const;
     static Vec3f VisPoint(const SolveChart& sc, int level, float u, float v,
                           const stream::SurfaceSample& smp);
