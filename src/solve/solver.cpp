@@ -14,6 +14,7 @@
 #include "solve/visibility.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -115,7 +116,7 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
 
 // What the field stores at each point: E itself (9 blocks), or for a radiosity
 // solution B = rho (n . E)+ per colour (3 blocks).
-void Solver::ToFieldValues(const std::vector<ReceiverPoint>& pts, const std::vector<Vec3f>& albedo,
+void Solver::ToFieldValues(std::span<const ReceiverPoint> pts, std::span<const Vec3f> albedo,
                            const std::vector<float>& e9, bool radiosity, std::vector<float>* vals) {
     vals->assign(pts.size() * (radiosity ? 3 : 9), 0.f);
     for (size_t p = 0; p < pts.size(); ++p) {
@@ -197,6 +198,12 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
                 }
+        for (size_t k = 0; k < lv.size(); ++k) {
+            TexelSource f[4];
+            for (size_t c = 0; c < 4; ++c)
+                f[c] = {e->facets[k * 4 + c].pos, e->facets[k * 4 + c].nrm, e->facets[k * 4 + c].area};
+            lv[k].spread = SpreadOf({lv[k].pos, lv[k].nrm, lv[k].area}, f);
+        }
     }
     // Coarser samples: area-weighted means.
     for (int l = top - 1; l >= 0; --l) {
@@ -242,6 +249,12 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     }
                 }
                 hull.Get(t.pos, t.radius, &t.hull, &t.hull_radius);
+                TexelSource f[4];
+                for (uint32_t c = 0; c < 4; ++c) {
+                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
+                    f[c] = {k.pos, k.nrm, k.area};
+                }
+                t.spread = SpreadOf({t.pos, t.nrm, t.area}, f);
             }
         }
     }
@@ -370,12 +383,8 @@ private:
         uint32_t texel;
         Vec3f contribution;  // E per unit radiosity of the texel
     };
-    struct PointSet {  // a receiver node's Gauss points
-        std::vector<ReceiverPoint> pts;
-        std::vector<Vec3f> albedo;
-    };
     struct Deferred {  // a link made, not yet summed (EvaluateLink, Resolve)
-        uint32_t node, points;                        // receiver node, its point_sets_ entry
+        uint32_t node, points;  // receiver node, its first point in set_pts_ (ng^2 of them)
         const std::vector<Emitter::Texel>* texels;  // the emitter level sampled
         float vis;                                   // < 0: one ray per pair
         size_t pair0, pair1;                         // its pairs_
@@ -450,11 +459,12 @@ private:
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
         if (n != set_node_) {  // the same node's points serve every emitter
-            point_sets_.push_back({pts_, albedo_});
+            set_pts_.insert(set_pts_.end(), pts_.begin(), pts_.end());
+            set_albedo_.insert(set_albedo_.end(), albedo_.begin(), albedo_.end());
             set_node_ = n;
         }
         const auto& texels = em.levels[size_t(ls)];
-        Deferred d{uint32_t(n), uint32_t(point_sets_.size() - 1), &texels, vis, pairs_.size(),
+        Deferred d{uint32_t(n), uint32_t(set_pts_.size() - pts_.size()), &texels, vis, pairs_.size(),
                    0, batch_.size()};
         CollectPairs(em, lk, ls, vis < 0);
         d.pair1 = pairs_.size();
@@ -541,14 +551,17 @@ private:
         deferred_.clear();
         pairs_.clear();
         batch_.Clear();
-        point_sets_.clear();
+        set_pts_.clear();
+        set_albedo_.clear();
         set_node_ = SIZE_MAX;
     }
 
     // A resolved link's light at its node's Gauss points, added to the node's sum.
     void SumLink(const Deferred& d) {
-        const PointSet& ps = point_sets_[d.points];
-        e9_.assign(ps.pts.size() * 9, 0.f);
+        const size_t np = size_t(ng_ * ng_);
+        const std::span<const ReceiverPoint> pts(&set_pts_[d.points], np);
+        const std::span<const Vec3f> albedo(&set_albedo_[d.points], np);
+        e9_.assign(np * 9, 0.f);
         for (size_t q = d.pair0; q < d.pair1; ++q) {
             if (d.vis < 0 && batch_.occluded[d.seg0 + (q - d.pair0)])
                 continue;
@@ -559,7 +572,7 @@ private:
                 for (int k = 0; k < 3; ++k)
                     e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
         }
-        ToFieldValues(ps.pts, ps.albedo, e9_, s_.opt_.settings.radiosity, &vals_);
+        ToFieldValues(pts, albedo, e9_, s_.opt_.settings.radiosity, &vals_);
         float* acc = NodeValues(d.node);
         for (size_t k = 0; k < vals_.size(); ++k)
             acc[k] += vals_[k];
@@ -690,74 +703,69 @@ private:
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
-    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_.
+    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. A
+    // sample's facets are read only for the pairs where they may not all face the receiver
+    // point the same way (FacetsAgree); the others take TexelTransfer's answer, which
+    // FacetedTransfer would give them.
     void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
         const auto& texels = em.levels[size_t(ls)];
+        const int top = int(em.levels.size()) - 1;
+        const bool faceted = ls < top || !em.facets.empty();
         const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
-        RegionFacets(em, lk, ls);
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
             const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b) {
                 for (uint32_t a = 0; a < span; ++a) {
-                    const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
+                    const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
                     const auto& t = texels[k];
                     if (t.area <= 0 || t.db_max <= 0)
                         continue;
-                    const size_t f0 = size_t(b * span + a) * 4;
+                    const TexelSource src{t.pos, t.nrm, t.area};
                     Vec3d contrib;
-                    int carrier;
-                    if (!FacetedTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area},
-                                         Facets(f0), texel_side, &contrib, &carrier))
-                        continue;
+                    int carrier = -1;
+                    if (!faceted || FacetsAgree(rp.position, src, t.spread)) {
+                        if (!TexelTransfer(rp.position, rp.normal, src, texel_side, &contrib))
+                            continue;
+                    } else {
+                        SampleFacets(em, ls, i, j);
+                        if (!FacetedTransfer(rp.position, rp.normal, src, facets_, texel_side,
+                                             &contrib, &carrier))
+                            continue;
+                    }
                     pairs_.push_back({p, k, Vec3f(contrib)});
                     if (!rays)
                         continue;
-                    if (carrier < 0) {
+                    if (carrier < 0)
                         batch_.AddSegment(org, t.vis + t.nrm * eps_);
-                    } else {
-                        const size_t f = f0 + size_t(carrier);
-                        batch_.AddSegment(org, facet_vis_[f] + facets_[f].nrm * eps_);
-                    }
+                    else
+                        batch_.AddSegment(org, facet_vis_[size_t(carrier)] +
+                                                   facets_[size_t(carrier)].nrm * eps_);
                 }
             }
         }
     }
 
-    // The facets of every sample of region lk at level ls, 4 per sample in the region's
-    // row order (facet_count_ 4), or none (0): a coarse level's are its children, the
-    // finest level's the emitter's facets.
-    void RegionFacets(const Emitter& em, const Link& lk, int ls) {
+    // The four facets of sample (i, j) at level ls into facets_ and facet_vis_, in
+    // quadrant order: a coarse level's are its children, the finest level's the
+    // emitter's facets.
+    void SampleFacets(const Emitter& em, int ls, uint32_t i, uint32_t j) {
         const int top = int(em.levels.size()) - 1;
-        const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        facets_.clear();
-        facet_vis_.clear();
-        facet_count_ = ls < top || !em.facets.empty() ? 4 : 0;
-        if (facet_count_ == 0)
-            return;
-        for (uint32_t b = 0; b < span; ++b)
-            for (uint32_t a = 0; a < span; ++a) {
-                const uint32_t i = lk.i * span + a, j = lk.j * span + b;
-                for (uint32_t c = 0; c < 4; ++c) {
-                    if (ls < top) {
-                        const auto& k = em.levels[size_t(ls) + 1][size_t(2 * j + (c >> 1)) * row * 2 +
-                                                                  2 * i + (c & 1)];
-                        facets_.push_back({k.pos, k.nrm, k.area});
-                        facet_vis_.push_back(k.vis);
-                    } else {
-                        const auto& f = em.facets[(size_t(j) * row + i) * 4 + c];
-                        facets_.push_back({f.pos, f.nrm, f.area});
-                        facet_vis_.push_back(f.vis);
-                    }
-                }
+        const uint32_t row = 1u << ls;
+        for (uint32_t c = 0; c < 4; ++c) {
+            if (ls < top) {
+                const auto& k = em.levels[size_t(ls) + 1][size_t(2 * j + (c >> 1)) * row * 2 +
+                                                          2 * i + (c & 1)];
+                facets_[c] = {k.pos, k.nrm, k.area};
+                facet_vis_[c] = k.vis;
+            } else {
+                const auto& f = em.facets[(size_t(j) * row + i) * 4 + c];
+                facets_[c] = {f.pos, f.nrm, f.area};
+                facet_vis_[c] = f.vis;
             }
-    }
-
-    std::span<const TexelSource> Facets(size_t first) const {
-        return facet_count_ ? std::span(facets_).subspan(first, facet_count_)
-                            : std::span<const TexelSource>();
+        }
     }
 
     Solver& s_;
@@ -770,7 +778,7 @@ private:
     const LinkTolerance tolerance_;
     double receiver_tau_ = 0, negligible_ = 0;
     size_t pts_node_ = SIZE_MAX;  // the node pts_ belongs to (NodePoints)
-    size_t set_node_ = SIZE_MAX;  // the node point_sets_.back() belongs to
+    size_t set_node_ = SIZE_MAX;  // the node of the last points in set_pts_
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
@@ -779,14 +787,14 @@ private:
     std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX
     std::vector<ReceiverPoint> point_cache_;
     std::vector<Vec3f> albedo_cache_;
-    std::vector<PointSet> point_sets_;   // the deferred links' receiver points
+    std::vector<ReceiverPoint> set_pts_;  // the deferred links' receiver points, ng^2 a node
+    std::vector<Vec3f> set_albedo_;
     std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
     // Their pairs and segments (at most SolveOptions::link_defer_pairs, plus one link's): ~60 B
     // a pair here and ~100 in the paged visibility, ~2.5 MB per gathering thread at 16K.
     std::vector<Pair> pairs_;
-    std::vector<TexelSource> facets_;  // RegionFacets()
-    std::vector<Vec3f> facet_vis_;
-    size_t facet_count_ = 0;
+    std::array<TexelSource, 4> facets_;  // SampleFacets()
+    std::array<Vec3f, 4> facet_vis_;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_, split_;  // split_: SplitVisibility's own
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB

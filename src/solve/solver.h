@@ -19,6 +19,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include "solve/direct.h"
 #include "solve/field.h"
 #include "solve/scene.h"
+#include "solve/transfer.h"
 #include "solve/geometry_cache.h"
 
 namespace mebake::solve {
@@ -162,6 +164,7 @@ private:
             float cone = 0;    // every sampled normal within lies within this angle of nrm
             Vec3f hull;        // a tight sphere around the texel's real points and samples
             float hull_radius = 0;
+            FacetSpread spread;  // of its facets (transfer.h): its children, or `facets`
         };
         uint32_t chart = 0;
         std::vector<std::vector<Texel>> levels;  // levels[l]: (2^l)^2 texels
@@ -225,9 +228,9 @@ private:
                           const stream::SurfaceSample& smp);
     void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,
                      std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const;
-    static void ToFieldValues(const std::vector<ReceiverPoint>& pts,
-                              const std::vector<Vec3f>& albedo, const std::vector<float>& e9,
-                              bool radiosity, std::vector<float>* vals);
+    static void ToFieldValues(std::span<const ReceiverPoint> pts, std::span<const Vec3f> albedo,
+                              const std::vector<float>& e9, bool radiosity,
+                              std::vector<float>* vals);
 
     const Scene& scene_;
     const std::vector<SolveChart>& charts_;

@@ -2,6 +2,7 @@
 
 #include "solve/polygon_light.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -73,6 +74,27 @@ bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
         }
     }
     return any;
+}
+
+FacetSpread SpreadOf(const TexelSource& t, std::span<const TexelSource> facets) {
+    double offset = 0, tilt = 0, reach = 0;
+    for (const TexelSource& f : facets) {
+        if (f.area <= 0)
+            continue;  // FacetedTransfer does not count it
+        const Vec3d to = Vec3d(t.pos) - Vec3d(f.pos);
+        const double rho = Length(to), delta = Length(Vec3d(f.nrm) - Vec3d(t.nrm));
+        offset = std::max(offset, rho * delta + std::abs(Dot(to, Vec3d(t.nrm))));
+        tilt = std::max(tilt, delta);
+        reach = std::max(reach, rho);
+    }
+    // Margins for rounding: both sides' dot products are evaluated in double from floats
+    // (relative error ~1e-15 of D + rho), and the bound is stored as floats.
+    return {float((offset + 1e-6 * reach) * (1 + 1e-5)), float(tilt + 1e-6)};
+}
+
+bool FacetsAgree(const Vec3f& x, const TexelSource& t, const FacetSpread& spread) {
+    const Vec3d d = Vec3d(x) - Vec3d(t.pos);
+    return std::abs(Dot(d, Vec3d(t.nrm))) > spread.offset + std::sqrt(Dot(d, d)) * spread.tilt;
 }
 
 }  // namespace mebake::solve
