@@ -200,8 +200,10 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 }
         for (size_t k = 0; k < lv.size(); ++k) {
             TexelSource f[4];
-            for (size_t c = 0; c < 4; ++c)
-                f[c] = {e->facets[k * 4 + c].pos, e->facets[k * 4 + c].nrm, e->facets[k * 4 + c].area};
+            for (size_t c = 0; c < 4; ++c) {
+                const Emitter::Facet& g = e->facets[k * 4 + c];
+                f[c] = {g.pos, g.nrm, g.area};
+            }
             lv[k].spread = SpreadOf({lv[k].pos, lv[k].nrm, lv[k].area}, f);
         }
     }
@@ -471,8 +473,8 @@ private:
             set_node_ = n;
         }
         const auto& texels = em.levels[size_t(ls)];
-        Deferred d{uint32_t(n), uint32_t(set_pts_.size() - pts_.size()), &texels, vis, pairs_.size(),
-                   0, batch_.size()};
+        Deferred d{uint32_t(n), uint32_t(set_pts_.size() - pts_.size()), &texels, vis,
+                   pairs_.size(), 0, batch_.size()};
         CollectPairs(em, lk, ls, vis < 0);
         d.pair1 = pairs_.size();
         if (d.pair1 == d.pair0)
