@@ -42,6 +42,12 @@ constexpr int kBoundaryLevelsAboveCap = 2;
 // spacing of its control points (lucy's folds, the crevices of nefertiti's crown).
 constexpr int kEdgeGrid = 16;
 
+// At the depth cap (nodes M+1 texels wide) a node whose points see a light's centre from
+// some points and not from others holds a shadow edge: its polynomial rings across it (lucy's
+// umbra points lit at 5-10 % of the lit side, lit points 10 % over), while the light map's
+// texels could hold the step. Such nodes are split this many levels below the cap.
+constexpr int kEdgeLevelsBelowCap = 1;
+
 // The direct light's ray offset, in units of Solver::RayOffset (half a light-map texel).
 constexpr float kDirectOffset = 0.25f;
 
@@ -89,8 +95,11 @@ public:
     // control grid (docs/method.md, "Refinement").
     bool MissedShadowEdge(const QuadNode& node) {
         const int n = std::min(kEdgeGrid, 1 << std::max(0, max_level_ - int(node.level)));
-        if (n <= gc_)
-            return false;
+        return n > gc_ && ShadowEdgeOnGrid(node, n);
+    }
+
+    // The lights' visibility changes between the centres of an n x n grid over the node.
+    bool ShadowEdgeOnGrid(const QuadNode& node, int n) {
         const int gl = std::min(finest_, int(node.level) + 2);
         edge_pts_.clear();
         for (int b = 0; b < n; ++b) {
@@ -450,8 +459,17 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         ProjectGauss(order, ng, sampler.gauss_vals.data(), blocks, coeffs.data());
         std::copy(coeffs.begin(), coeffs.end(), field.value(n));
         std::copy(coeffs.begin(), coeffs.end(), field.unshot(n));
-        if (!control)
+        if (!control) {
+            // At the cap, a shadow edge inside the node (one ray per point of the control
+            // grid's size to each light's centre): split below it, ranked as if the node
+            // missed by its largest value.
+            if (int(node.level) < max_level + kEdgeLevelsBelowCap &&
+                sampler.ShadowEdgeOnGrid(node, gc))
+                queue.push({std::max(scale, float(reference_ * 0.02)) *
+                                std::ldexp(1.f, -2 * int(node.level)),
+                            n});
             return;
+        }
         scale = std::max({scale, MaxAbs(sampler.ctrl_vals), float(reference_ * 0.02)});
         float err = ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data());
         if (err <= float(opt_.settings.tolerance) * scale && sampler.MissedShadowEdge(node))

@@ -335,6 +335,52 @@ TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
     EXPECT_LT(worst, 0.03) << "penumbra error relative to the lit value";
 }
 
+// A shadow edge sharper than a light-map texel, inside a node at the depth cap (M2: two
+// texels): the node's biquadratic through its 3 x 3 Gauss points (two in umbra, one lit
+// per row) rings across the step and lit its umbra side at 15 % of the lit value here
+// (lucy's umbra points at 5-10 %, bench/RESULTS.md "Issue 14 (session 11)"). Such a node
+// is split once more (texel-sized children): the child wholly in umbra holds 0 (the child
+// that holds the edge still rings, within its texel).
+TEST(Solver, ShadowEdgeAtTheDepthCapStaysInItsTexel) {
+    TestScene ts;
+    ts.scene.per_input = {{Mat(0.0f)}};
+    PolygonLight light;  // 0.2 x 0.2 at y = 10 over the origin: penumbra 0.004 wide
+    light.vertices = {{-0.1, 10, -0.1}, {0.1, 10, -0.1}, {0.1, 10, 0.1}, {-0.1, 10, 0.1}};
+    light.radiance = {1, 1, 1};
+    ts.scene.lights.push_back(light);
+    // Floor 4 x 4 at y = 0, light map 32 texels across (texel 0.125; cap nodes 0.25 wide,
+    // one of them [0, 0.25] in x), and a plate at y = 0.1 whose shadow ends at x = 0.18.
+    Patch floor = MakePatch([](double u, double v) { return Vec3d(4 * u - 2, 0, 2 - 4 * v); },
+                            64, 0, 4);
+    floor.chart.max_level = 5;
+    ts.Add(floor);
+    const float xe = 0.18f * 9.9f / 10;
+    std::vector<float> plate = {-3, 0.1f, -3, xe, 0.1f, -3, xe, 0.1f, 3, -3, 0.1f, 3};
+    std::vector<uint32_t> plate_tris = {0, 2, 1, 0, 3, 2};
+    ts.vis.AddTriangles(plate, plate_tris, "plate");
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.max_bounces = 0;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    auto at = [&](double x, double z) {
+        return Irradiance(solver, 0, (x + 2) / 4, (2 - z) / 4, Vec3d(0, 1, 0));
+    };
+    const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(0.2, 0, 0), Vec3d(0, 1, 0));
+    double worst_umbra = 0, worst_lit = 0;
+    for (double z = -1.05; z <= 1.05; z += 0.1) {
+        for (int k = 0; k < 12; ++k)  // x in (0, 0.12): the umbra child of the cap node
+            worst_umbra = std::max(worst_umbra, std::abs(at(0.005 + 0.01 * k, z)) / lit);
+        for (int k = 0; k < 12; ++k) {  // x in (0.25, 0.5): lit, the next cap node
+            const double x = 0.26 + 0.02 * k;
+            const double e = IrradianceClipped(light.vertices, 1.0, Vec3d(x, 0, z), Vec3d(0, 1, 0));
+            worst_lit = std::max(worst_lit, std::abs(at(x, z) - e) / lit);
+        }
+    }
+    EXPECT_LT(worst_umbra, 1e-3);
+    EXPECT_LT(worst_lit, 0.01);
+}
+
 // A thin feature's rim (an ear, a leg, a fold), one chart: a strip folded like a hairpin,
 // two flat faces 2 r apart joined by a half cylinder of radius r that takes a twentieth of
 // the chart's width, under one small distant light over the top face from the side away
