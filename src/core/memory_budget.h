@@ -72,4 +72,11 @@ private:
     uint64_t total_;
 };
 
+// Hands the heap's free pages back to the system (glibc: malloc_trim). Freed memory stays
+// resident otherwise: glibc trims only the top of each arena, above a threshold that grows
+// to twice the largest block freed (up to 64 MB), and a worker thread's arena not at all.
+// A stage calls it between passes, when what the last pass freed would otherwise count
+// against the next pass's peak.
+void ReturnFreedHeap();
+
 }  // namespace mebake
