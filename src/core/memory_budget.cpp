@@ -58,4 +58,9 @@ void ReturnFreedHeap() {
     malloc_trim(0);
 }
 
+void KeepLargeBlocksOutOfTheHeap() {
+    // Setting it also fixes the trim threshold at its default (no dynamic thresholds).
+    mallopt(M_MMAP_THRESHOLD, 4 << 20);
+}
+
 }  // namespace mebake

@@ -79,4 +79,12 @@ private:
 // against the next pass's peak.
 void ReturnFreedHeap();
 
+// Blocks of 4 MiB and more straight from the system (mmap), returned to it when freed, and
+// the heap's top trimmed above glibc's default 128 KiB. glibc's own rule raises the mmap
+// threshold to the largest block freed (up to 32 MB) and the top's trim threshold to twice
+// that, so after a few large arrays every later one lands in a heap that keeps what it
+// frees; with two threads each keeping its own, the ingest's peak grew with the number of
+// bricks (16M sphere: 218-233 MiB, 198 with this; bench/RESULTS.md, issue 16 session 11).
+void KeepLargeBlocksOutOfTheHeap();
+
 }  // namespace mebake

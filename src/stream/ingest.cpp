@@ -212,6 +212,7 @@ Manifest Ingest(const IngestOptions& opt) {
     Manifest m;
     m.memory_budget = opt.memory;
     const MemoryBudget budget(opt.memory);
+    KeepLargeBlocksOutOfTheHeap();
     m.max_distortion = opt.max_distortion;
 
     // Pass 1: spill.
