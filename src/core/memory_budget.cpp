@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <malloc.h>
+
 namespace mebake {
 
 namespace {
@@ -50,6 +52,15 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"solve.coefficient_pools", CoefficientPools(), "min(1/16, 64 MiB) beyond pinned charts"},
             {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"},
             {"export.stitch_cache", StitchCache(), "min(1/16, 4 MiB)"}};
+}
+
+void ReturnFreedHeap() {
+    malloc_trim(0);
+}
+
+void KeepLargeBlocksOutOfTheHeap() {
+    // Setting it also fixes the trim threshold at its default (no dynamic thresholds).
+    mallopt(M_MMAP_THRESHOLD, 4 << 20);
 }
 
 }  // namespace mebake

@@ -72,4 +72,19 @@ private:
     uint64_t total_;
 };
 
+// Hands the heap's free pages back to the system (glibc: malloc_trim). Freed memory stays
+// resident otherwise: glibc trims only the top of each arena, above a threshold that grows
+// to twice the largest block freed (up to 64 MB), and a worker thread's arena not at all.
+// A stage calls it between passes, when what the last pass freed would otherwise count
+// against the next pass's peak.
+void ReturnFreedHeap();
+
+// Blocks of 4 MiB and more straight from the system (mmap), returned to it when freed, and
+// the heap's top trimmed above glibc's default 128 KiB. glibc's own rule raises the mmap
+// threshold to the largest block freed (up to 32 MB) and the top's trim threshold to twice
+// that, so after a few large arrays every later one lands in a heap that keeps what it
+// frees; with two threads each keeping its own, the ingest's peak grew with the number of
+// bricks (16M sphere: 218-233 MiB, 198 with this; bench/RESULTS.md, issue 16 session 11).
+void KeepLargeBlocksOutOfTheHeap();
+
 }  // namespace mebake

@@ -1,6 +1,7 @@
 #include "output/texel_stitch.h"
 
 #include "core/check.h"
+#include "core/memory_budget.h"
 #include "core/paged_file.h"
 #include "output/seam_graph.h"
 
@@ -16,6 +17,7 @@ constexpr double kSamplesPerTexel = 3;
 constexpr uint32_t kMaxSamplesPerEdge = 256;
 constexpr int kMaxIterations = 500;
 constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
+constexpr uint32_t kTrimCharts = 32;  // charts prepared between returns of the freed heap
 
 
 Vec2d D(Vec2f v) {
@@ -211,19 +213,22 @@ double MismatchSquares(SeamRows& a, const std::vector<double>& x) {
 
 }  // namespace
 
-int64_t TexelStitch::Slot(uint32_t chart, uint32_t texel) const {
-    if (size_t(chart) + 1 >= first_.size())
+int64_t TexelStitch::Local(uint32_t chart, uint32_t texel) const {
+    if (chart >= charts_.size())
         return -1;
-    const auto begin = texel_.begin() + first_[chart], end = texel_.begin() + first_[chart + 1];
-    const auto it = std::lower_bound(begin, end, texel);
-    return it == end || *it != texel ? -1 : it - texel_.begin();
+    const std::vector<uint32_t>& t = charts_[chart].texel;
+    const auto it = std::lower_bound(t.begin(), t.end(), texel);
+    return it == t.end() || *it != texel ? -1 : it - t.begin();
+}
+
+int64_t TexelStitch::Slot(uint32_t chart, uint32_t texel) const {
+    const int64_t k = Local(chart, texel);
+    return k < 0 ? -1 : first_[chart] + k;
 }
 
 const float* TexelStitch::Find(uint32_t chart, uint32_t i, uint32_t j) const {
-    if (chart >= resolution_.size())
-        return nullptr;
-    const int64_t slot = Slot(chart, j * resolution_[chart] + i);
-    return slot < 0 ? nullptr : &values_[size_t(slot) * size_t(channels_)];
+    const int64_t k = chart < resolution_.size() ? Local(chart, j * resolution_[chart] + i) : -1;
+    return k < 0 ? nullptr : &charts_[chart].values[size_t(k) * size_t(channels_)];
 }
 
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
@@ -267,9 +272,9 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
         },
         [&](uint32_t c, stream::ChartTile&, ChartPart& part) {
             CHECK_EQ(st.first_.size(), size_t(c) + 1);
-            st.texel_.insert(st.texel_.end(), part.texels.begin(), part.texels.end());
-            st.first_.push_back(uint32_t(st.texel_.size()));
-            st.values_.insert(st.values_.end(), part.values.begin(), part.values.end());
+            st.first_.push_back(st.first_.back() + uint32_t(part.texels.size()));
+            part.texels.shrink_to_fit();  // sorted and made unique in place
+            st.charts_.push_back({std::move(part.texels), std::move(part.values)});
             for (size_t i = 0; i < part.sides.size(); ++i)
                 pairing.Add(c, part.keys[i], part.sides[i],
                             [&](const EdgeSide& x, const EdgeSide& y) {
@@ -277,8 +282,23 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
                                     add_pair(x, y);
                             });
             pairing.Done(c);
+            // Each chart's tile, field and shader are freed around the texel arrays kept for
+            // the solve, leaving holes that stay resident: back to the system every
+            // kTrimCharts charts, so what is resident does not grow with the chart count.
+            if (c % kTrimCharts == kTrimCharts - 1)
+                ReturnFreedHeap();
         });
-    const size_t n = st.values_.size() / nc;
+    // The tiles, fields and shaders the preparation freed are still resident in the
+    // workers' heaps: back to the system before the solve's vectors are made.
+    ReturnFreedHeap();
+    const size_t n = st.size();
+    // f(slot, its channels) for every slot in order.
+    auto for_each_slot = [&](auto&& f) {
+        size_t slot = 0;
+        for (TexelStitch::ChartTexels& ct : st.charts_)
+            for (size_t k = 0; k < ct.texel.size(); ++k)
+                f(slot++, &ct.values[k * nc]);
+    };
     std::vector<double> diag(n, 1.0);
     rows.ForEach([&](const SeamRow& row) {
         const std::array<double, 8> w = row.Weights();
@@ -291,14 +311,13 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     double before = 0, after = 0;
     std::vector<double> x(n);
     for (size_t ch = 0; ch < solved && rows.rows() > 0; ++ch) {
-        for (size_t i = 0; i < n; ++i)
-            x[i] = st.values_[i * nc + ch];
+        for_each_slot([&](size_t i, const float* v) { x[i] = v[ch]; });
         before += MismatchSquares(rows, x);
         s.iterations = std::max(s.iterations, SolveChannel(rows, diag, x));
         after += MismatchSquares(rows, x);
-        for (size_t i = 0; i < n; ++i)  // B >= 0; E is signed
-            st.values_[i * nc + ch] =
-                content == MapContent::Radiosity ? std::max(0.f, float(x[i])) : float(x[i]);
+        for_each_slot([&](size_t i, float* v) {  // B >= 0; E is signed
+            v[ch] = content == MapContent::Radiosity ? std::max(0.f, float(x[i])) : float(x[i]);
+        });
     }
     const double count = double(std::max<size_t>(1, rows.rows() * solved));
     s.rms_before = std::sqrt(before / count);

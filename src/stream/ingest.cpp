@@ -23,8 +23,6 @@
 #include <cmath>
 #include <filesystem>
 
-#include <malloc.h>
-
 namespace mebake::stream {
 
 namespace fs = std::filesystem;
@@ -214,6 +212,7 @@ Manifest Ingest(const IngestOptions& opt) {
     Manifest m;
     m.memory_budget = opt.memory;
     const MemoryBudget budget(opt.memory);
+    KeepLargeBlocksOutOfTheHeap();
     m.max_distortion = opt.max_distortion;
 
     // Pass 1: spill.
@@ -357,7 +356,7 @@ Manifest Ingest(const IngestOptions& opt) {
                 // mmap threshold grows to the largest block freed, up to 32 MB, so a brick's
                 // big arrays land on the heap), and bricks in turn would leave the pages of
                 // every earlier brick's holes resident.
-                malloc_trim(0);
+                ReturnFreedHeap();
             } catch (...) {
                 failed = true;
                 throw;
