@@ -98,14 +98,31 @@ std::byte* MappedCache::MutableData(uint32_t r) {
     return Map(r);
 }
 
-void MappedCache::DropPages(const Region& r) {
+void MappedCache::DropPages(uint32_t victim) {
     if (data_ == nullptr)
         return;
-    // Whole pages only: regions start on page boundaries, and the last one ends the file.
+    // Reading a page maps its neighbours too where they are in the page cache (the kernel's
+    // fault-around, 64 KiB windows), pages of other regions that nothing counts, and that
+    // their own eviction, done before, no longer drops. So 64 KiB on each side of the victim
+    // go too, up to the pages of the nearest resident region.
+    constexpr uint64_t kFaultAround = uint64_t(64) << 10;
     const uint64_t page = uint64_t(::sysconf(_SC_PAGESIZE));
-    const uint64_t begin = (r.offset + page - 1) / page * page;
-    const uint64_t end =
-        std::min((r.offset + r.bytes + page - 1) / page * page, (size_ + page - 1) / page * page);
+    auto up = [](uint64_t x, uint64_t a) { return (x + a - 1) / a * a; };
+    const Region& r = regions_[victim];
+    // Any 64 KiB window that holds a page of the region (the kernel aligns them in the
+    // address space, or starts them at the mapping's start).
+    uint64_t begin = r.offset > kFaultAround ? r.offset - kFaultAround : 0;
+    uint64_t end = std::min(up(r.offset + r.bytes, page) + kFaultAround, up(size_, page));
+    for (uint32_t k = victim; k-- > 0 && regions_[k].offset + regions_[k].bytes > begin;)
+        if (regions_[k].resident) {
+            begin = std::max(begin, up(regions_[k].offset + regions_[k].bytes, page));
+            break;
+        }
+    for (uint32_t k = victim + 1; k < regions_.size() && regions_[k].offset < end; ++k)
+        if (regions_[k].resident) {
+            end = std::min(end, regions_[k].offset);  // regions start on page boundaries
+            break;
+        }
     if (end > begin)
         ::madvise(data_ + begin, end - begin, MADV_DONTNEED);
 }
@@ -141,7 +158,7 @@ void MappedCache::TrimLocked() {
                 victim = &g;
         if (!victim)
             return;  // everything resident is pinned
-        DropPages(*victim);
+        DropPages(uint32_t(victim - regions_.data()));
         victim->resident = false;
         stats_.resident_bytes -= victim->bytes;
         ++stats_.evictions;

@@ -96,7 +96,7 @@ private:
         bool resident = false;
         uint64_t last_use = 0;
     };
-    void DropPages(const Region& r);
+    void DropPages(uint32_t victim);  // its pages and the unaccounted ones around it
 
     std::string path_;  // for messages; the file itself is unlinked
     int fd_ = -1;
