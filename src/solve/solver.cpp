@@ -198,14 +198,6 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
                 }
-        for (size_t k = 0; k < lv.size(); ++k) {
-            TexelSource f[4];
-            for (size_t c = 0; c < 4; ++c) {
-                const Emitter::Facet& g = e->facets[k * 4 + c];
-                f[c] = {g.pos, g.nrm, g.area};
-            }
-            lv[k].spread = SpreadOf({lv[k].pos, lv[k].nrm, lv[k].area}, f);
-        }
     }
     // Coarser samples: area-weighted means.
     for (int l = top - 1; l >= 0; --l) {
@@ -251,18 +243,41 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     }
                 }
                 hull.Get(t.pos, t.radius, &t.hull, &t.hull_radius);
-                TexelSource f[4];
-                for (uint32_t c = 0; c < 4; ++c) {
-                    const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
-                    f[c] = {k.pos, k.nrm, k.area};
-                }
-                t.spread = SpreadOf({t.pos, t.nrm, t.area}, f);
             }
         }
+    }
+    // Each sample's facet spread (transfer.h), from the facets the gather reads.
+    for (int l = 0; l <= top && (l < top || !e->facets.empty()); ++l) {
+        const uint32_t m = 1u << l;
+        for (uint32_t j = 0; j < m; ++j)
+            for (uint32_t i = 0; i < m; ++i) {
+                Emitter::Texel& t = e->levels[size_t(l)][size_t(j) * m + i];
+                TexelSource f[4];
+                Vec3f vis[4];
+                e->FacetsOf(l, i, j, f, vis);
+                t.spread = SpreadOf({t.pos, t.nrm, t.area}, f);
+            }
     }
     const auto& root = sc.geometry.At(0, 0, 0);
     e->center = root.position;
     e->radius = root.radius;
+}
+
+void Solver::Emitter::FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4],
+                               Vec3f vis[4]) const {
+    const uint32_t row = 1u << l;
+    for (uint32_t c = 0; c < 4; ++c) {
+        if (l + 1 < int(levels.size())) {
+            const Texel& k =
+                levels[size_t(l) + 1][size_t(2 * j + (c >> 1)) * row * 2 + 2 * i + (c & 1)];
+            f[c] = {k.pos, k.nrm, k.area};
+            vis[c] = k.vis;
+        } else {
+            const Facet& g = facets[(size_t(j) * row + i) * 4 + c];
+            f[c] = {g.pos, g.nrm, g.area};
+            vis[c] = g.vis;
+        }
+    }
 }
 
 double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
@@ -739,7 +754,7 @@ private:
                         if (!TexelTransfer(rp.position, rp.normal, src, texel_side, &contrib))
                             continue;
                     } else {
-                        SampleFacets(em, ls, i, j);
+                        em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
                         if (!FacetedTransfer(rp.position, rp.normal, src, facets_, texel_side,
                                              &contrib, &carrier))
                             continue;
@@ -753,26 +768,6 @@ private:
                         batch_.AddSegment(org, facet_vis_[size_t(carrier)] +
                                                    facets_[size_t(carrier)].nrm * eps_);
                 }
-            }
-        }
-    }
-
-    // The four facets of sample (i, j) at level ls into facets_ and facet_vis_, in
-    // quadrant order: a coarse level's are its children, the finest level's the
-    // emitter's facets.
-    void SampleFacets(const Emitter& em, int ls, uint32_t i, uint32_t j) {
-        const int top = int(em.levels.size()) - 1;
-        const uint32_t row = 1u << ls;
-        for (uint32_t c = 0; c < 4; ++c) {
-            if (ls < top) {
-                const auto& k = em.levels[size_t(ls) + 1][size_t(2 * j + (c >> 1)) * row * 2 +
-                                                          2 * i + (c & 1)];
-                facets_[c] = {k.pos, k.nrm, k.area};
-                facet_vis_[c] = k.vis;
-            } else {
-                const auto& f = em.facets[(size_t(j) * row + i) * 4 + c];
-                facets_[c] = {f.pos, f.nrm, f.area};
-                facet_vis_[c] = f.vis;
             }
         }
     }
@@ -802,7 +797,7 @@ private:
     // Their pairs and segments (at most SolveOptions::link_defer_pairs, plus one link's): ~60 B
     // a pair here and ~100 in the paged visibility, ~2.5 MB per gathering thread at 16K.
     std::vector<Pair> pairs_;
-    std::array<TexelSource, 4> facets_;  // SampleFacets()
+    std::array<TexelSource, 4> facets_;  // Emitter::FacetsOf()
     std::array<Vec3f, 4> facet_vis_;
     std::vector<float> e9_, vals_, coeffs_;
     SegmentBatch batch_, probe_, rest_, split_;  // split_: SplitVisibility's own

@@ -175,6 +175,9 @@ private:
             float area = 0;
         };
         std::vector<Facet> facets;
+        // The four facets of sample (i, j) of level l, in quadrant order: its children at
+        // level l + 1, or at the finest level `facets` (which must not be empty there).
+        void FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4], Vec3f vis[4]) const;
         Vec3f center;
         float radius = 0;
         double scale = 1;

@@ -352,10 +352,10 @@ Manifest Ingest(const IngestOptions& opt) {
                 std::vector<Vec3f>().swap(r.proxy_positions);
                 std::vector<uint32_t>().swap(r.proxy_triangles);
                 results[b] = std::move(r);
-                // The brick's memory back to the system: glibc keeps freed heap pages (its
-                // mmap threshold grows to the largest block freed, up to 32 MB, so a brick's
-                // big arrays land on the heap), and bricks in turn would leave the pages of
-                // every earlier brick's holes resident.
+                // The brick's memory back to the system: glibc keeps the freed pages of
+                // blocks under the mmap threshold (KeepLargeBlocksOutOfTheHeap, above), and
+                // bricks in turn would leave the pages of every earlier brick's holes
+                // resident.
                 ReturnFreedHeap();
             } catch (...) {
                 failed = true;
