@@ -20,7 +20,7 @@ constexpr uint32_t kMaxSamplesPerEdge = 256;
 constexpr int kMaxIterations = 500;
 constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
 constexpr uint32_t kTrimCharts = 4;  // charts prepared between returns of the freed heap
-constexpr size_t kFileCacheBytes = size_t(1) << 20;  // each of the texel and value files
+constexpr size_t kFileCacheBytes = size_t(256) << 10;  // each of the texel and value files
 constexpr size_t kBlockSlots = 16384;  // slots read (and written) at a time by the CG
 
 
