@@ -15,15 +15,15 @@
 // edge (p_A, p_B the same surface point in both charts). The normal equations
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
-// memory grows with the seams' texels, not with the map (per texel 4 bytes of index, its
-// channels as floats and 5 doubles of CG; the samples, 64 bytes each, in a temporary file
-// read in order a block at a time behind a 4 MiB page cache; the sides
-// waiting for their pair only while a neighbouring chart can still come, seam_graph.h's
-// BorderPairing). The texels and their values go to temporary files as each chart is
-// prepared: a chart's texel list stays in memory only while a later chart can pair with
-// it, the CG reads and writes the values in slot order a block at a time, and the light
-// map reads each chart's back with its tile (TexelStitch::Chart), so no per-texel array of
-// the whole map is held (17 MB at 100M triangles, 858K seam texels). The global CG is kept (one system, not one per seam component) so the
+// memory grows with the seams' texels, not with the map: 5 doubles of CG per texel while
+// the CG runs. The rest is on disk: the samples, 64 bytes each, in a temporary file read in
+// order a block at a time behind a 4 MiB page cache; the texels' indices and values in two
+// more (256 KiB cached each), written as each chart is prepared, read and written in slot
+// order by the CG and read back a chart at a time with its tile by the light map
+// (TexelStitch::Chart): a chart's texel list stays in memory only while a later chart can
+// pair with it, as its sides wait for their pair (seam_graph.h's BorderPairing), so no
+// per-texel array of the whole map outlives the CG (it was 17 MB at 100M triangles, 858K
+// seam texels). The global CG is kept (one system, not one per seam component) so the
 // texels are the same bytes as before. Single-threaded and
 // in chart order: the same texels for any thread count. Folds (faces more than 45 degrees
 // apart) and mesh borders are left alone, as seam_graph.h does.
