@@ -3,6 +3,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/memory_budget.h"
 #include "core/parallel.h"
 #include "io/png_writer.h"
 #include "output/texel_stitch.h"
@@ -20,21 +21,27 @@ namespace {
 // Radiance = B / pi, divided as shading.cpp does so the glossy path agrees to the bit.
 constexpr float kPi = float(std::numbers::pi);
 
-// The tiles and shaders of a group of charts.
+// The tiles, shaders and stitched texels of a group of charts.
 struct ChartGroup {
     std::vector<stream::ChartTile> tiles;
     std::vector<std::shared_ptr<const ChartField>> fields;
     std::vector<std::unique_ptr<ChartShader>> shaders;
+    std::vector<StitchedTexels> stitched;  // empty without a stitch
 };
 
-ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const uint32_t> charts) {
+ChartGroup LoadCharts(const BakeView& view, const Atlas& atlas, std::span<const uint32_t> charts,
+                      const TexelStitch* stitch) {
     ChartGroup g;
     const size_t n = charts.size();
     g.tiles.resize(n);
     g.fields.resize(n);
     g.shaders.resize(n);
+    if (stitch)
+        g.stitched.resize(n);
     ParallelFor(0, int64_t(n), [&](int64_t k) {
         const uint32_t c = charts[size_t(k)];
+        if (stitch)
+            g.stitched[size_t(k)] = stitch->Chart(c);
         const std::string path = view.TilePath(c);
         auto& tile = g.tiles[size_t(k)];
         tile = stream::ReadTile(path, stream::TileParts::Mesh);
@@ -83,7 +90,7 @@ void ShadeTexel(const ChartShader& shader, Vec2f uv, MapContent content, float* 
 
 void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
                     MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
-                    size_t stride, const TexelStitch* stitch) {
+                    size_t stride, const StitchedTexels* stitch) {
     const uint32_t g = atlas.gutter, res = atlas.charts[chart].resolution, block = res + 2 * g;
     CHECK_LE(row_end, block);
     const size_t nc = size_t(MapChannels(content));
@@ -93,7 +100,7 @@ void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t char
         const uint32_t j = std::clamp(by, g, g + res - 1) - g;
         for (uint32_t bx = g; bx < g + res; ++bx) {
             float* px = row + size_t(bx) * nc;
-            if (const float* s = stitch ? stitch->Find(chart, bx - g, j) : nullptr)
+            if (const float* s = stitch ? stitch->Find(j * res + bx - g, int(nc)) : nullptr)
                 std::copy_n(s, nc, px);
             else
                 ShadeTexel(shader, atlas.TexelUv(chart, bx, by), content, px);
@@ -145,8 +152,13 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
         rows_buffer.assign(size_t(shelf.height) * stride, 0.f);
         const std::span<const uint32_t> all(shelf.charts);
         for (size_t first = 0; first < all.size(); first += group) {
+            // The last group's tiles, fields and shaders leave holes in the two threads'
+            // heaps that stay resident and add up over thousands of charts (40+ MB at 100M
+            // triangles): back to the system before the next group.
+            if (first > 0)
+                ReturnFreedHeap();
             const auto charts = all.subspan(first, std::min(group, all.size() - first));
-            const ChartGroup g = LoadCharts(view, atlas, charts);
+            const ChartGroup g = LoadCharts(view, atlas, charts, stitch);
             // One task per (chart, row): each writes its own texels only.
             const uint32_t rows = shelf.height;
             ParallelFor(0, int64_t(charts.size()) * rows, [&](int64_t task) {
@@ -158,7 +170,8 @@ void ComputePage(const BakeView& view, const Atlas& atlas, uint32_t page, MapCon
                 if (by >= atlas.block(c))
                     return;  // a smaller block than the shelf's height
                 float* out = rows_buffer.data() + size_t(r) * stride + size_t(ac.x) * nc;
-                FillChartBlock(*g.shaders[k], atlas, c, content, by, by + 1, out, stride, stitch);
+                FillChartBlock(*g.shaders[k], atlas, c, content, by, by + 1, out, stride,
+                               stitch ? &g.stitched[k] : nullptr);
             });
         }
         emit(shelf.y, shelf.height);

@@ -37,6 +37,7 @@ namespace mebake::output {
 enum class MapContent { Radiosity, Irradiance };
 
 class TexelStitch;
+struct StitchedTexels;
 
 int MapChannels(MapContent content);
 std::vector<std::string> MapChannelNames(MapContent content);
@@ -58,10 +59,11 @@ void ShadeTexel(const ChartShader& shader, Vec2f uv, MapContent content, float* 
 
 // Fills block rows [row_begin, row_end) of one chart's block (gutters included): `out`
 // points at texel (0, row_begin) of the block, rows `stride` floats apart, MapChannels
-// floats per texel; texels `stitch` has are taken from it. Exposed for tests.
+// floats per texel; texels `stitch` (this chart's, TexelStitch::Chart) has are taken from
+// it. Exposed for tests.
 void FillChartBlock(const ChartShader& shader, const Atlas& atlas, uint32_t chart,
                     MapContent content, uint32_t row_begin, uint32_t row_end, float* out,
-                    size_t stride, const TexelStitch* stitch = nullptr);
+                    size_t stride, const StitchedTexels* stitch = nullptr);
 
 // The file of page p: `path` itself for a one-page atlas, else UDIM-numbered
 // "name.<1001 + p>.ext" (page p = UDIM tile 1001 + p: u offset p % 10, v offset p / 10).

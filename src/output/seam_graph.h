@@ -131,6 +131,9 @@ public:
         }
     }
 
+    // The charts whose waiting sides Done(c) drops: no later chart pairs with them.
+    const std::vector<uint32_t>& Retired(uint32_t c) const { return retire_at_[c]; }
+
     // Sides that never paired (so far).
     uint64_t open() const { return dropped_ + waiting_.size(); }
     size_t waiting() const { return waiting_.size(); }

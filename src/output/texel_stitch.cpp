@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
+#include <unordered_map>
 
 namespace mebake::output {
 
@@ -17,7 +19,9 @@ constexpr double kSamplesPerTexel = 3;
 constexpr uint32_t kMaxSamplesPerEdge = 256;
 constexpr int kMaxIterations = 500;
 constexpr double kTolerance = 1e-7;  // relative residual of the normal equations
-constexpr uint32_t kTrimCharts = 32;  // charts prepared between returns of the freed heap
+constexpr uint32_t kTrimCharts = 4;  // charts prepared between returns of the freed heap
+constexpr size_t kFileCacheBytes = size_t(256) << 10;  // each of the texel and value files
+constexpr size_t kBlockSlots = 16384;  // slots read (and written) at a time by the CG
 
 
 Vec2d D(Vec2f v) {
@@ -213,22 +217,34 @@ double MismatchSquares(SeamRows& a, const std::vector<double>& x) {
 
 }  // namespace
 
-int64_t TexelStitch::Local(uint32_t chart, uint32_t texel) const {
-    if (chart >= charts_.size())
-        return -1;
-    const std::vector<uint32_t>& t = charts_[chart].texel;
-    const auto it = std::lower_bound(t.begin(), t.end(), texel);
-    return it == t.end() || *it != texel ? -1 : it - t.begin();
+const float* StitchedTexels::Find(uint32_t t, int channels) const {
+    const auto it = std::lower_bound(texel.begin(), texel.end(), t);
+    return it == texel.end() || *it != t ? nullptr
+                                          : &values[size_t(it - texel.begin()) * size_t(channels)];
 }
 
-int64_t TexelStitch::Slot(uint32_t chart, uint32_t texel) const {
-    const int64_t k = Local(chart, texel);
-    return k < 0 ? -1 : first_[chart] + k;
-}
+struct TexelStitch::Files {
+    std::mutex mutex;  // the files' page caches
+    DiskArray<uint32_t> texels{PagedFile::Temporary{{}, "texel stitch texels"}, kFileCacheBytes};
+    DiskArray<float> values{PagedFile::Temporary{{}, "texel stitch values"}, kFileCacheBytes};
+};
 
-const float* TexelStitch::Find(uint32_t chart, uint32_t i, uint32_t j) const {
-    const int64_t k = chart < resolution_.size() ? Local(chart, j * resolution_[chart] + i) : -1;
-    return k < 0 ? nullptr : &charts_[chart].values[size_t(k) * size_t(channels_)];
+TexelStitch::TexelStitch() : files_(std::make_unique<Files>()) {}
+TexelStitch::~TexelStitch() = default;
+TexelStitch::TexelStitch(TexelStitch&&) noexcept = default;
+
+StitchedTexels TexelStitch::Chart(uint32_t c) const {
+    StitchedTexels t;
+    if (size_t(c) + 1 >= first_.size() || first_[c] == first_[c + 1])
+        return t;
+    const size_t first = first_[c], n = first_[c + 1] - first, nc = size_t(channels_);
+    t.texel.resize(n);
+    t.values.resize(n * nc);
+    const std::lock_guard lock(files_->mutex);
+    files_->texels.file().Read(first * sizeof(uint32_t), t.texel.data(), n * sizeof(uint32_t));
+    files_->values.file().Read(first * nc * sizeof(float), t.values.data(),
+                               n * nc * sizeof(float));
+    return t;
 }
 
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
@@ -238,13 +254,22 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     const size_t nc = size_t(st.channels_);
     // Radiosity maps stitch R, G, B (A stays 1).
     const size_t solved = content == MapContent::Radiosity ? 3 : nc;
-    for (const AtlasChart& ac : atlas.charts)
-        st.resolution_.push_back(ac.resolution);
-    BorderPairing<EdgeSide> pairing(view);
+    const std::vector<uint32_t> last = LastNeighbours(view);
+    BorderPairing<EdgeSide> pairing(last);
     SeamRows rows;
     st.first_.assign(1, 0);
+    // The texel lists of the charts a later chart can still pair with (the rest are only
+    // in the file).
+    std::unordered_map<uint32_t, std::vector<uint32_t>> live;
+    auto slot = [&](uint32_t chart, uint32_t texel) -> int64_t {
+        const auto at = live.find(chart);
+        CHECK(at != live.end());
+        const std::vector<uint32_t>& t = at->second;
+        const auto it = std::lower_bound(t.begin(), t.end(), texel);
+        return it == t.end() || *it != texel ? -1 : st.first_[chart] + (it - t.begin());
+    };
     auto add_pair = [&](const EdgeSide& x, const EdgeSide& y) {
-        const uint32_t rx = st.resolution_[x.chart], ry = st.resolution_[y.chart];
+        const uint32_t rx = atlas.charts[x.chart].resolution, ry = atlas.charts[y.chart].resolution;
         const double len = std::max(Length(D(x.b) - D(x.a)) * rx, Length(D(y.b) - D(y.a)) * ry);
         const uint32_t n = uint32_t(
             std::clamp(std::ceil(kSamplesPerTexel * len), 1.0, double(kMaxSamplesPerEdge)));
@@ -255,16 +280,17 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
             std::array<uint32_t, 8> idx;
             bool found = true;
             for (int m = 0; m < 8 && found; ++m) {
-                const int64_t slot = m < 4 ? st.Slot(x.chart, fx.texel[size_t(m)])
-                                           : st.Slot(y.chart, fy.texel[size_t(m - 4)]);
-                found = slot >= 0;
+                const int64_t at = m < 4 ? slot(x.chart, fx.texel[size_t(m)])
+                                         : slot(y.chart, fy.texel[size_t(m - 4)]);
+                found = at >= 0;
                 if (found)
-                    idx[size_t(m)] = uint32_t(slot);
+                    idx[size_t(m)] = uint32_t(at);
             }
             if (found)
                 rows.Add(idx, fx, fy);
         }
     };
+    TexelStitch::Files& files = *st.files_;
     ForEachTile(
         view, AllCharts(view), stream::TileParts::Mesh,
         [&](uint32_t c, stream::ChartTile& tile) {
@@ -273,8 +299,10 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
         [&](uint32_t c, stream::ChartTile&, ChartPart& part) {
             CHECK_EQ(st.first_.size(), size_t(c) + 1);
             st.first_.push_back(st.first_.back() + uint32_t(part.texels.size()));
+            files.texels.PushMany(part.texels.data(), part.texels.size());
+            files.values.PushMany(part.values.data(), part.values.size());
             part.texels.shrink_to_fit();  // sorted and made unique in place
-            st.charts_.push_back({std::move(part.texels), std::move(part.values)});
+            live.emplace(c, std::move(part.texels));
             for (size_t i = 0; i < part.sides.size(); ++i)
                 pairing.Add(c, part.keys[i], part.sides[i],
                             [&](const EdgeSide& x, const EdgeSide& y) {
@@ -282,9 +310,11 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
                                     add_pair(x, y);
                             });
             pairing.Done(c);
-            // Each chart's tile, field and shader are freed around the texel arrays kept for
-            // the solve, leaving holes that stay resident: back to the system every
-            // kTrimCharts charts, so what is resident does not grow with the chart count.
+            for (const uint32_t a : pairing.Retired(c))
+                live.erase(a);
+            // Each chart's tile, field and shader are freed around what the pass keeps,
+            // leaving holes that stay resident: back to the system every kTrimCharts
+            // charts, so what is resident does not grow with the chart count.
             if (c % kTrimCharts == kTrimCharts - 1)
                 ReturnFreedHeap();
         });
@@ -292,12 +322,20 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     // workers' heaps: back to the system before the solve's vectors are made.
     ReturnFreedHeap();
     const size_t n = st.size();
-    // f(slot, its channels) for every slot in order.
-    auto for_each_slot = [&](auto&& f) {
-        size_t slot = 0;
-        for (TexelStitch::ChartTexels& ct : st.charts_)
-            for (size_t k = 0; k < ct.texel.size(); ++k)
-                f(slot++, &ct.values[k * nc]);
+    // f(slot, its channels) for every slot in order, the values read from the file a block
+    // at a time (and written back when `write`).
+    auto for_each_slot = [&](bool write, auto&& f) {
+        std::vector<float> block;
+        for (size_t first = 0; first < n; first += kBlockSlots) {
+            const size_t count = std::min(kBlockSlots, n - first);
+            block.resize(count * nc);
+            const uint64_t at = first * nc * sizeof(float), bytes = block.size() * sizeof(float);
+            files.values.file().Read(at, block.data(), bytes);
+            for (size_t k = 0; k < count; ++k)
+                f(first + k, &block[k * nc]);
+            if (write)
+                files.values.file().Write(at, block.data(), bytes);
+        }
     };
     std::vector<double> diag(n, 1.0);
     rows.ForEach([&](const SeamRow& row) {
@@ -311,11 +349,11 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     double before = 0, after = 0;
     std::vector<double> x(n);
     for (size_t ch = 0; ch < solved && rows.rows() > 0; ++ch) {
-        for_each_slot([&](size_t i, const float* v) { x[i] = v[ch]; });
+        for_each_slot(false, [&](size_t i, const float* v) { x[i] = v[ch]; });
         before += MismatchSquares(rows, x);
         s.iterations = std::max(s.iterations, SolveChannel(rows, diag, x));
         after += MismatchSquares(rows, x);
-        for_each_slot([&](size_t i, float* v) {  // B >= 0; E is signed
+        for_each_slot(true, [&](size_t i, float* v) {  // B >= 0; E is signed
             v[ch] = content == MapContent::Radiosity ? std::max(0.f, float(x[i])) : float(x[i]);
         });
     }

@@ -15,11 +15,15 @@
 // edge (p_A, p_B the same surface point in both charts). The normal equations
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
-// memory grows with the seams' texels, not with the map (per texel 4 bytes of index, its
-// channels as floats and 5 doubles of CG; the samples, 64 bytes each, in a temporary file
-// read in order a block at a time behind a 4 MiB page cache; the sides
-// waiting for their pair only while a neighbouring chart can still come, seam_graph.h's
-// BorderPairing). The global CG is kept (one system, not one per seam component) so the
+// memory grows with the seams' texels, not with the map: 5 doubles of CG per texel while
+// the CG runs. The rest is on disk: the samples, 64 bytes each, in a temporary file read in
+// order a block at a time behind a 4 MiB page cache; the texels' indices and values in two
+// more (256 KiB cached each), written as each chart is prepared, read and written in slot
+// order by the CG and read back a chart at a time with its tile by the light map
+// (TexelStitch::Chart): a chart's texel list stays in memory only while a later chart can
+// pair with it, as its sides wait for their pair (seam_graph.h's BorderPairing), so no
+// per-texel array of the whole map outlives the CG (it was 17 MB at 100M triangles, 858K
+// seam texels). The global CG is kept (one system, not one per seam component) so the
 // texels are the same bytes as before. Single-threaded and
 // in chart order: the same texels for any thread count. Folds (faces more than 45 degrees
 // apart) and mesh borders are left alone, as seam_graph.h does.
@@ -30,6 +34,7 @@
 #include "output/lightmap.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace mebake::output {
@@ -42,29 +47,29 @@ struct TexelStitchStats {
     double rms_after = 0;
 };
 
+// One chart's stitched texels, read back from the stitch's file for the chart being shaded.
+struct StitchedTexels {
+    std::vector<uint32_t> texel;  // j * res + i, ascending
+    std::vector<float> values;    // channels per texel
+    // Texel `texel`'s `channels` floats, or nullptr when it is not a seam texel.
+    const float* Find(uint32_t texel, int channels) const;
+};
+
 class TexelStitch {
 public:
-    // The stitched texel (i, j) of chart c's square (MapChannels floats), or nullptr.
-    const float* Find(uint32_t chart, uint32_t i, uint32_t j) const;
+    TexelStitch();
+    ~TexelStitch();
+    TexelStitch(TexelStitch&&) noexcept;
+    // Chart c's stitched texels (empty when it has none). Thread-safe.
+    StitchedTexels Chart(uint32_t c) const;
     size_t size() const { return first_.empty() ? 0 : first_.back(); }
 
 private:
     friend TexelStitch StitchTexels(const BakeView&, const Atlas&, MapContent, TexelStitchStats*);
-    // Texel j * res + i of a chart: its index among the chart's seam texels, or -1; its
-    // slot among all charts' (the unknown's index), or -1.
-    int64_t Local(uint32_t chart, uint32_t texel) const;
-    int64_t Slot(uint32_t chart, uint32_t texel) const;
-    // A chart's seam texels. Kept per chart, each array its exact size: one array for all
-    // would grow by doubling while the charts come in, up to three times the texels' bytes
-    // at a reallocation (51 MB at 100M triangles) in the middle of the stitch's preparation.
-    struct ChartTexels {
-        std::vector<uint32_t> texel;  // j * res + i, ascending
-        std::vector<float> values;    // channels_ per texel
-    };
+    struct Files;  // every chart's texels and values, in slot order, in temporary files
     int channels_ = 0;
-    std::vector<uint32_t> resolution_;  // per chart
-    std::vector<uint32_t> first_;       // per chart and one more: its first slot
-    std::vector<ChartTexels> charts_;   // per chart
+    std::vector<uint32_t> first_;  // per chart and one more: its first slot
+    std::unique_ptr<Files> files_;
 };
 
 // The weight lambda of the seam samples against keeping a texel as shaded.

@@ -450,6 +450,35 @@ TEST_F(StitchTest, LightMapFilteredAcrossSeamsAgrees) {
     EXPECT_LT(stitched, 0.005);
 }
 
+// The stitched texels go to temporary files as the charts are prepared and come back a chart
+// at a time (TexelStitch::Chart): every chart of the grid has seams, its texels ascending in
+// its own square, and the charts' lists add up to the unknowns the CG solved.
+TEST_F(StitchTest, TexelsComeBackPerChart) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    const Atlas atlas = PackAtlas(ChartResolutions(view));
+    TexelStitchStats stats;
+    const TexelStitch stitch = StitchTexels(view, atlas, MapContent::Radiosity, &stats);
+    EXPECT_EQ(stitch.size(), stats.texels);
+    size_t total = 0;
+    for (uint32_t c = 0; c < view.chart_count(); ++c) {
+        const StitchedTexels t = stitch.Chart(c);
+        const uint32_t res = atlas.charts[c].resolution;
+        ASSERT_FALSE(t.texel.empty()) << "chart " << c;
+        ASSERT_EQ(t.values.size(), t.texel.size() * 4);
+        EXPECT_TRUE(std::is_sorted(t.texel.begin(), t.texel.end()));
+        EXPECT_LT(t.texel.back(), res * res);
+        for (size_t k = 0; k < t.texel.size(); ++k) {
+            EXPECT_EQ(t.Find(t.texel[k], 4), &t.values[k * 4]);
+            EXPECT_EQ(t.values[k * 4 + 3], 1.f);  // A is not stitched
+        }
+        total += t.texel.size();
+    }
+    EXPECT_EQ(total, stitch.size());
+    EXPECT_TRUE(stitch.Chart(uint32_t(view.chart_count())).texel.empty());
+}
+
 TEST_F(StitchTest, VertexCopiesAgree) {
     GridOptions o = Perturbed();
     o.tilt = 0.3f;
