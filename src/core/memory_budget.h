@@ -85,6 +85,10 @@ void ReturnFreedHeap();
 // that, so after a few large arrays every later one lands in a heap that keeps what it
 // frees; with two threads each keeping its own, the ingest's peak grew with the number of
 // bricks (16M sphere: 218-233 MiB, 198 with this; bench/RESULTS.md, issue 16 session 11).
+// It stays for the rest of the process (`mebake bake`'s solve and export): glibc cannot go
+// back to its dynamic thresholds, and their ceiling set after the ingest (mmap 32 MiB, trim
+// 64 MiB) raised the horse's bake peak from 171-176 to 212-216 MiB for no CPU measured
+// (issue 16 session 12).
 void KeepLargeBlocksOutOfTheHeap();
 
 }  // namespace mebake

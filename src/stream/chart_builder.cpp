@@ -124,6 +124,10 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     if (mesh.triangles.empty())
         return out;
     out.repair = Repair(mesh, on_cut, RepairOptions{});
+    // The caller keeps every brick's result to the end of the ingest: the report's counts,
+    // not its per-vertex cut flags (1 B per vertex of the whole mesh, 50 MB at 100M
+    // triangles: the ingest's peak grew with the mesh; bench/RESULTS.md, issue 16 session 12).
+    std::vector<uint8_t>().swap(out.repair.vertex_on_cut);
     out.proxy_positions = mesh.position;
     out.proxy_triangles.reserve(mesh.triangles.size() * 3);
     for (const auto& t : mesh.triangles)

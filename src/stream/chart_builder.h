@@ -55,7 +55,7 @@ struct ChartBuildOptions {
 struct BrickResult {
     std::vector<ChartRecord> charts;      // in tile order
     std::vector<std::string> tile_files;  // temporary names, renamed by the caller
-    RepairReport repair;
+    RepairReport repair;  // its counts (vertex_on_cut left empty)
     uint64_t splits = 0;  // charts split for distortion or topology
     // Seconds spent per stage in this brick (wall time of the calling thread), in the
     // order of kChartStageNames.

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <regex>
@@ -71,7 +72,10 @@ TEST(ProgressTmux, LinesWithPercentAndEtaDuringIngestDirectAndBatches) {
             std::smatch m;
             if (std::regex_search(line, m, live))
                 seen.insert(m[1]);
-            exited |= line.rfind("MEBAKE_EXIT=", 0) == 0;
+            // The status, not the typed command: a long checkout path wraps the command
+            // line so that its "MEBAKE_EXIT=$?" can begin a screen line too.
+            exited |= line.rfind("MEBAKE_EXIT=", 0) == 0 && line.size() > 12 &&
+                      std::isdigit(static_cast<unsigned char>(line[12]));
         }
     }
     ASSERT_TRUE(exited) << "the bake did not finish in 20 minutes; last screen:\n" << screen;
