@@ -64,13 +64,27 @@ Scene SkyAlone(const Vec3d& radiance) {
     return scene;
 }
 
-TEST(DirectLight, UniformSkyOnOpenPlane) {
-    const Scene scene = SkyAlone({1, 2, 3});
-    VisibilityScene vis;
+// A scene with one small triangle far away: every sky direction from the origin is open.
+void OpenSky(VisibilityScene& vis) {
     std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
     std::vector<uint32_t> tri = {0, 1, 2};
     vis.AddTriangles(far, tri, "far");
     vis.Commit();
+}
+
+// A square plane y = height, 2e4 wide, facing up (counter-clockwise seen from above).
+void WidePlane(VisibilityScene& vis, float height, const char* name) {
+    std::vector<float> v = {-1e4f, height, -1e4f, -1e4f, height, 1e4f,
+                            1e4f,  height, 1e4f,  1e4f,  height, -1e4f};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+    vis.AddTriangles(v, tris, name);
+    vis.Commit();
+}
+
+TEST(DirectLight, UniformSkyOnOpenPlane) {
+    const Scene scene = SkyAlone({1, 2, 3});
+    VisibilityScene vis;
+    OpenSky(vis);
     DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
     std::vector<ReceiverPoint> pts = {{{0, 0, 0}, {0, 1, 0}, {0, 0, 0}}};
     std::vector<float> e(9);
@@ -86,10 +100,7 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
 TEST(DirectLight, OpenTiltedReceiverSeesItsSkyExactly) {
     const Scene scene = SkyAlone({1, 2, 3});
     VisibilityScene vis;
-    std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
-    std::vector<uint32_t> tri = {0, 1, 2};
-    vis.AddTriangles(far, tri, "far");
-    vis.Commit();
+    OpenSky(vis);
     DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
     for (double deg : {10.0, 37.0, 80.0, 125.0}) {
         const double a = deg * std::numbers::pi / 180;
@@ -112,10 +123,7 @@ TEST(DirectLight, OpenTiltedReceiverSeesItsSkyExactly) {
 TEST(DirectLight, SkyPriorTakesDirectionsWithoutRays) {
     const Scene scene = SkyAlone({1, 1, 1});
     VisibilityScene vis;
-    std::vector<float> roof = {-1e4f, 1, -1e4f, -1e4f, 1, 1e4f, 1e4f, 1, 1e4f, 1e4f, 1, -1e4f};
-    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
-    vis.AddTriangles(roof, tris, "roof");
-    vis.Commit();
+    WidePlane(vis, 1, "roof");
     DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
     const Vec3f up{0, 1, 0};
     std::vector<ReceiverPoint> pts = {{{0, 0, 0}, up, {0, 0, 0}, up}};
@@ -152,10 +160,7 @@ TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
     VisibilityScene vis;
     // A floor y = 0 facing up (counter-clockwise seen from above), wide enough that no sky
     // direction passes beside it from under it.
-    std::vector<float> floor = {-1e4f, 0, -1e4f, -1e4f, 0, 1e4f, 1e4f, 0, 1e4f, 1e4f, 0, -1e4f};
-    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
-    vis.AddTriangles(floor, tris, "floor");
-    vis.Commit();
+    WidePlane(vis, 0, "floor");
     const float offset = 1e-3f, reach = 0.05f;
     DirectLight direct(scene, scene.solver, vis, offset, 10, reach);
     auto sky_at = [&](float depth) {
