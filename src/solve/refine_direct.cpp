@@ -27,8 +27,8 @@ namespace mebake::solve {
 namespace {
 
 // Nodes this many levels above the light-map texel or finer share light visibility between
-// their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
-// what the light map cannot hold anyway.
+// their points (DirectLight::Evaluate probes; the sky's directions, SkyShared): shadow
+// detail smaller than a few texels is what the light map cannot hold anyway.
 constexpr int kCoherentLevels = 3;
 
 // --multi-emitter simplify: the extremal boundaries are resolved down to this many levels
