@@ -96,7 +96,7 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
 
 // A receiver tilted from the sky's up that sees its whole sky: E is the closed form over the
 // directions above both horizons (the control variate), exact, where the fixed directions
-// alone were 0.6 % off and stepped as the tilt passed them.
+// alone were off by up to 2 % of pi in a component and stepped as the tilt passed them.
 TEST(DirectLight, OpenTiltedReceiverSeesItsSkyExactly) {
     const Scene scene = SkyAlone({1, 2, 3});
     VisibilityScene vis;
