@@ -94,6 +94,13 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
+bool DirectLight::ReachedByALight(const ReceiverPoint& rp) const {
+    ReceiverPoint without_face = rp;
+    without_face.face = {};
+    return std::any_of(lights_.begin(), lights_.end(),
+                       [&](const Light& l) { return Faces(l, without_face); });
+}
+
 bool DirectLight::Faces(const Light& l, const ReceiverPoint& rp) {
     // E does not involve the receiver's shading normal (that is what keeps it smooth on
     // noisy scans): what lies below the surface is removed by the horizon, the face plane
@@ -211,15 +218,24 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     std::fill(out.begin(), out.end(), 0.f);
     if (cache)
         CHECK_EQ(keys.size(), probes);
-    const std::vector<ReceiverPoint> on_surface = OnSurface(points);
+    const bool with_sky = sky_.type != Sky::Type::None && (parts & kSky);
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky);
     if (parts & kLights)
         AddLights(on_surface, out, probes, cache, keys, known);
-    if (sky_.type != Sky::Type::None && (parts & kSky))
+    if (with_sky)
         AddSky(on_surface, out);
 }
 
+void DirectLight::EvaluateSky(std::span<const ReceiverPoint> points, std::span<float> out,
+                              std::span<const uint8_t> prior, std::vector<uint8_t>* states) const {
+    CHECK_EQ(out.size(), points.size() * 9);
+    std::fill(out.begin(), out.end(), 0.f);
+    if (has_sky())
+        AddSky(OnSurface(points), out, prior, states);
+}
+
 bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
-    const std::vector<ReceiverPoint> on_surface = OnSurface(points);
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points, true);
     for (const auto& l : lights_) {
         // A point whose own face turns from the light's centre counts as hidden: the
         // surface shades itself there (a fold turning away), an edge to refine as well.
@@ -254,11 +270,14 @@ bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
 // `reach_` means the point is under the surface: it moves up to where the ray left. Else a
 // ray the other way meeting the front of a triangle within `reach_` means it is above: it
 // moves down onto it.
-std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint> points) const {
+std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint> points,
+                                                   bool lights_only) const {
     std::vector<ReceiverPoint> out(points.begin(), points.end());
-    std::vector<size_t> which(points.size());
+    std::vector<size_t> which;
     for (size_t p = 0; p < points.size(); ++p)
-        which[p] = p;
+        if (!lights_only || ReachedByALight(points[p]))
+            which.push_back(p);
+    const std::vector<size_t> moved = which;
     for (float dir : {1.f, -1.f}) {
         std::vector<Segment> segs(which.size());
         for (size_t k = 0; k < which.size(); ++k) {
@@ -285,20 +304,21 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     // normal field turns between vertex normals, and across a fold of large triangles a
     // face can tilt from it by 15 degrees or more: grazing key light the face cannot see
     // counted in full there (lucy's worst point, bench/RESULTS.md "Issue 14 (session 9)").
-    std::vector<Segment> segs(out.size());
-    for (size_t k = 0; k < out.size(); ++k) {
-        const Vec3f o = out[k].vis_point + out[k].normal * offset_;
-        const Vec3f n = out[k].normal * -1.f;
+    std::vector<Segment> segs(moved.size());
+    for (size_t k = 0; k < moved.size(); ++k) {
+        const ReceiverPoint& rp = out[moved[k]];
+        const Vec3f o = rp.vis_point + rp.normal * offset_;
+        const Vec3f n = rp.normal * -1.f;
         segs[k] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, 2 * offset_};
     }
-    std::vector<Hit> hits(out.size());
+    std::vector<Hit> hits(moved.size());
     TraceHits(vis_, segs, hits, RayKind::kOrigin);
-    for (size_t k = 0; k < out.size(); ++k) {
+    for (size_t k = 0; k < moved.size(); ++k) {
+        ReceiverPoint& rp = out[moved[k]];
         const Vec3f ng(hits[k].ng_x, hits[k].ng_y, hits[k].ng_z);
         // Visibility-only points (no horizon) stay as they are.
-        if (hits[k].geom_id != kNoHit && Dot(ng, out[k].normal) > 0 &&
-            Dot(out[k].horizon, out[k].horizon) > 0)
-            out[k].face = Normalize(ng);
+        if (hits[k].geom_id != kNoHit && Dot(ng, rp.normal) > 0 && Dot(rp.horizon, rp.horizon) > 0)
+            rp.face = Normalize(ng);
     }
     return out;
 }
@@ -402,8 +422,16 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
 }
 
 // The sky at the points: one ray per fixed direction (sky.h), turned to the sky's up axis,
-// so E changes with position only where visibility does.
-void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const {
+// so E changes with position only where visibility does. The sky's uniform part is a control
+// variate: its integral over the directions above the point's planes (the sky's horizon, the
+// point's horizon and face) is taken in closed form and only the directions found occluded
+// there are subtracted, so a point that sees its whole sky is exact and its E turns smoothly
+// with its planes instead of in steps as they pass the fixed directions (docs/method.md,
+// "The sky").
+void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
+                         std::span<const uint8_t> prior, std::vector<uint8_t>* states) const {
+    if (!prior.empty())
+        CHECK_EQ(prior.size(), sky_dirs_.size());
     SegmentBatch batch;
     const Vec3f up(sky_.up);
     Vec3f t, b;
@@ -411,34 +439,59 @@ void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float>
     std::vector<Vec3f> dirs(sky_dirs_.size());
     for (size_t k = 0; k < sky_dirs_.size(); ++k)
         dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
-    for (const auto& rp : points) {
+    // Per point and direction: seen, occluded, below its planes (no ray), or traced.
+    constexpr uint8_t kTraced = 3;
+    std::vector<uint8_t> state(points.size() * dirs.size());
+    for (size_t p = 0; p < points.size(); ++p) {
+        const ReceiverPoint& rp = points[p];
         const Vec3f o = rp.vis_point + rp.normal * offset_;
-        for (const auto& w : dirs) {
-            // Below the horizon or the face: no ray, counted as blocked (tfar < 0 never hits).
-            bool below = !AboveSurface(rp, w);
-            batch.Add(o, w, below ? -1.f : far_);
+        for (size_t k = 0; k < dirs.size(); ++k) {
+            uint8_t& s = state[p * dirs.size() + k];
+            if (!AboveSurface(rp, dirs[k])) {
+                s = kSkyBelow;
+            } else if (!prior.empty() && prior[k] <= 1) {
+                s = prior[k];
+            } else {
+                s = kTraced;
+                batch.Add(o, dirs[k], far_);
+            }
         }
     }
     batch.Trace(vis_, RayKind::kSky);
-    for (size_t k = 0; k < batch.size(); ++k)
-        if (batch.segments[k].tfar < 0)
-            batch.occluded[k] = 1;
+    for (size_t i = 0, r = 0; i < state.size(); ++i)
+        if (state[i] == kTraced)
+            state[i] = batch.occluded[r++] ? 1 : 0;
+    if (states)
+        *states = state;
     // Estimator of E = integral of L(w) V w dw with the uniform pdf 1 / (2 pi):
-    // sum L w 2 pi / N.
-    const float scale = 2 * float(std::numbers::pi) / float(sky_dirs_.size());
-    size_t at = 0;
+    // sum L w 2 pi / N; the uniform part a: a (closed form above the planes - sum of the
+    // occluded directions above them), the overcast's (2/3) Lz cos part by the sum.
+    const double scale = 2 * std::numbers::pi / double(sky_dirs_.size());
+    const bool overcast = sky_.type == Sky::Type::Overcast;
+    const Vec3d uniform = sky_.radiance * (overcast ? 1.0 / 3.0 : 1.0);
     for (size_t p = 0; p < points.size(); ++p) {
+        const ReceiverPoint& rp = points[p];
+        const std::array<Vec3d, 3> planes = {Vec3d(up), Vec3d(rp.horizon), Vec3d(rp.face)};
+        Vec3d e[3] = {};  // per colour: the overcast's cos part
+        Vec3d occluded{};  // sum of occluded directions above the planes
         for (size_t k = 0; k < dirs.size(); ++k) {
-            if (batch.occluded[at++])
+            const uint8_t s = state[p * dirs.size() + k];
+            const Vec3d w(dirs[k]);
+            if (s == kSkyBelow)
+                continue;  // outside the closed form's region
+            if (s == 1) {
+                occluded += w;
                 continue;
-            const Vec3f& w = dirs[k];
-            const float cos_up = sky_dirs_[k].z;
-            const double gain = sky_.type == Sky::Type::Overcast ? (1 + 2 * cos_up) / 3.0 : 1.0;
-            for (int c = 0; c < 3; ++c) {
-                const float l = float(sky_.radiance[c] * gain) * scale;
-                for (int e = 0; e < 3; ++e)
-                    out[p * 9 + size_t(3 * c + e)] += l * w[e];
             }
+            if (overcast)
+                for (int c = 0; c < 3; ++c)
+                    e[c] += w * (sky_.radiance[c] * (2.0 / 3.0) * double(sky_dirs_[k].z) * scale);
+        }
+        const Vec3d open = HalfSpacesVector(planes) - occluded * scale;
+        for (int c = 0; c < 3; ++c) {
+            const Vec3d ec = e[c] + open * uniform[c];
+            for (int k = 0; k < 3; ++k)
+                out[p * 9 + size_t(3 * c + k)] += float(ec[k]);
         }
     }
 }

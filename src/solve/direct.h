@@ -103,6 +103,15 @@ public:
     // faces (one ray per point to the light's centre): a shadow edge among them.
     bool ShadowEdgeAmong(std::span<const ReceiverPoint> points) const;
     bool has_sky() const { return sky_.type != Sky::Type::None; }
+    // The sky alone at the points, as Evaluate(points, out, kSky) but for two things. prior
+    // (empty, or one per sky direction): 0 or 1 is taken as that direction's visibility
+    // (seen, occluded) wherever it is above a point's planes, without a ray; anything else is
+    // traced. states (may be null): per point and direction, 0 seen, 1 occluded, 2 below the
+    // point's planes (kSkyBelow).
+    static constexpr uint8_t kSkyBelow = 2;
+    void EvaluateSky(std::span<const ReceiverPoint> points, std::span<float> out,
+                     std::span<const uint8_t> prior, std::vector<uint8_t>* states) const;
+    size_t sky_direction_count() const { return sky_dirs_.size(); }
     bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.
     double EmittedPower() const;
@@ -133,11 +142,17 @@ private:
                    std::span<const uint8_t> known) const;
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
-    void AddSky(std::span<const ReceiverPoint> points, std::span<float> out) const;
+    void AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
+                std::span<const uint8_t> prior = {}, std::vector<uint8_t>* states = nullptr) const;
+    // Whether some light reaches the point by its side and horizon (Faces without its face
+    // plane): where none does, no light's result depends on where its visibility point is.
+    bool ReachedByALight(const ReceiverPoint& rp) const;
     // The points with their visibility points moved onto the real surface where they lie
     // under or above it (one ray each along the normal, at most reach_ long), and, for
     // points with a horizon, the plane of the face under their shadow-ray origin (`face`).
-    std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points) const;
+    // lights_only: only the points some light reaches (the others as they are; no ray).
+    std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points,
+                                         bool lights_only = false) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,

@@ -27,8 +27,8 @@ namespace mebake::solve {
 namespace {
 
 // Nodes this many levels above the light-map texel or finer share light visibility between
-// their points (DirectLight::Evaluate probes): shadow detail smaller than a few texels is
-// what the light map cannot hold anyway.
+// their points (DirectLight::Evaluate probes; the sky's directions, SkyShared): shadow
+// detail smaller than a few texels is what the light map cannot hold anyway.
 constexpr int kCoherentLevels = 3;
 
 // --multi-emitter simplify: the extremal boundaries are resolved down to this many levels
@@ -84,7 +84,7 @@ public:
         SamplePoints(node, gl, n_gauss, probes);
         e9_all_.assign(all_pts_.size() * 9, 0.f);
         if (parts == DirectLight::kSky && direct_.has_sky())
-            SkyShared(node, gl, n_gauss);
+            SkyShared(node, gl, n_gauss, probes);
         else if (parts != DirectLight::kSky && direct_.has_lights())
             direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known);
         ToGaussAndControl(n_gauss, n_ctrl, control);
@@ -179,13 +179,61 @@ private:
     // The sky at all_pts_: control points on a node's edges are its neighbours' too (same
     // chart coordinates and geometry level, so the same value): each is traced once per
     // chart and kept by its exact coordinates. A third fewer sky rays where GatherSky tests.
-    void SkyShared(const QuadNode& node, int gl, int n_gauss) {
-        std::vector<size_t> uncached;
-        std::vector<ReceiverPoint> pts;
+    // With probes (small nodes, OrderPoints), the probes are traced in every direction
+    // first (or found with their directions' states) and a direction all of them see, or
+    // all find occluded, is taken as such at the node's other points without a ray: the
+    // lights' reuse of visibility across a patch (DirectLight::Evaluate), for the sky.
+    void SkyShared(const QuadNode& node, int gl, int n_gauss, size_t probes) {
         std::vector<ProbeKey> keys(slot_.size());
+        std::vector<uint8_t> probe_states;  // probes x directions
+        const size_t nd = direct_.sky_direction_count();
+        std::vector<size_t> traced;  // probes traced now
         for (size_t k = 0; k < slot_.size(); ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
             keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), 0};
+        }
+        if (probes > 0) {
+            probe_states.resize(probes * nd);
+            for (size_t k = 0; k < probes; ++k) {
+                auto it = sky_states_.find(keys[k]);
+                if (it == sky_states_.end()) {
+                    traced.push_back(k);
+                    continue;
+                }
+                std::copy(it->second.begin(), it->second.end(), &probe_states[k * nd]);
+                const auto& e = sky_cache_.at(keys[k]);
+                std::copy(e.begin(), e.end(), &e9_all_[k * 9]);
+            }
+            std::vector<ReceiverPoint> pts;
+            for (size_t k : traced)
+                pts.push_back(all_pts_[k]);
+            std::vector<float> e9(pts.size() * 9);
+            std::vector<uint8_t> st;
+            direct_.EvaluateSky(pts, e9, {}, &st);
+            for (size_t q = 0; q < traced.size(); ++q) {
+                const size_t k = traced[q];
+                std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
+                std::copy(&st[q * nd], &st[(q + 1) * nd], &probe_states[k * nd]);
+                if (slot_[k] >= n_gauss) {
+                    std::array<float, 9> rec;
+                    std::copy(&e9[q * 9], &e9[q * 9] + 9, rec.begin());
+                    sky_cache_.insert_or_assign(keys[k], rec);
+                    sky_states_.emplace(keys[k], std::vector<uint8_t>(&st[q * nd], &st[(q + 1) * nd]));
+                }
+            }
+        }
+        // A direction's state where every probe sees it or every probe finds it occluded.
+        std::vector<uint8_t> prior;
+        if (probes > 0) {
+            prior.assign(probe_states.begin(), probe_states.begin() + std::ptrdiff_t(nd));
+            for (size_t k = 1; k < probes; ++k)
+                for (size_t d = 0; d < nd; ++d)
+                    if (probe_states[k * nd + d] != prior[d])
+                        prior[d] = DirectLight::kSkyBelow;
+        }
+        std::vector<size_t> uncached;
+        std::vector<ReceiverPoint> pts;
+        for (size_t k = probes; k < slot_.size(); ++k) {
             auto it = sky_cache_.find(keys[k]);
             if (it != sky_cache_.end()) {
                 std::copy(it->second.begin(), it->second.end(), &e9_all_[k * 9]);
@@ -195,7 +243,7 @@ private:
             }
         }
         std::vector<float> e9(pts.size() * 9);
-        direct_.Evaluate(pts, e9, DirectLight::kSky);
+        direct_.EvaluateSky(pts, e9, prior, nullptr);
         for (size_t q = 0; q < uncached.size(); ++q) {
             const size_t k = uncached[q];
             std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
@@ -241,6 +289,8 @@ private:
     DirectLight& direct_;
     ProbeCache probe_cache_;  // this chart's probes (node corners are shared)
     std::unordered_map<ProbeKey, std::array<float, 9>, ProbeKeyHash> sky_cache_;
+    // The sky's probes on node edges: their directions' states (DirectLight::EvaluateSky).
+    std::unordered_map<ProbeKey, std::vector<uint8_t>, ProbeKeyHash> sky_states_;
     std::vector<int> slot_;
     std::vector<ProbeKey> keys_;
     std::vector<ReceiverPoint> all_pts_, pts_, cpts_, edge_pts_;
@@ -513,7 +563,7 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
     const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
     DirectSampler sampler(*this, charts_[chart], order, max_level, direct);
     sampler.parts = DirectLight::kSky;
-    sampler.use_probes = false;
+    sampler.use_probes = true;  // small nodes: directions shared with the probes (SkyShared)
     std::vector<float> coeffs(size_t(field.stride()));
     std::vector<size_t> stack(1, 0);
     while (!stack.empty()) {

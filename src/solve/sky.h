@@ -16,6 +16,7 @@
 #include "core/vec.h"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace mebake::solve {
@@ -34,6 +35,13 @@ Vec3d SkyVectorIrradiance(const SkyModel& sky);
 
 // Irradiance of an unoccluded receiver with unit normal n (clipped to its hemisphere).
 double SkyIrradiance(const SkyModel& sky, const Vec3d& n);
+
+// Integral of w dw over the directions above every plane (unit normals; zero ones are
+// skipped): a region bounded by great-circle arcs, whose integral is half the sum over its
+// arcs of the arc's angle times its plane's normal (Stokes; Arvo 1995, the polygon light's
+// formula). With the sky's up and a receiver's planes, a uniform sky's vector irradiance
+// over what is above them, in closed form (DirectLight's control variate).
+Vec3d HalfSpacesVector(std::span<const Vec3d> planes);
 
 // The directions the solver traces the sky along (DirectLight), about +z (the caller
 // turns them to the sky's up axis): uniform over the upper hemisphere (each stands for

@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "solve/polygon_light.h"
+#include "solve/sky.h"
 #include "solve/visibility.h"
 
 namespace mebake::solve {
@@ -62,13 +64,27 @@ Scene SkyAlone(const Vec3d& radiance) {
     return scene;
 }
 
-TEST(DirectLight, UniformSkyOnOpenPlane) {
-    const Scene scene = SkyAlone({1, 2, 3});
-    VisibilityScene vis;
+// A scene with one small triangle far away: every sky direction from the origin is open.
+void OpenSky(VisibilityScene& vis) {
     std::vector<float> far = {100, 100, 100, 101, 100, 100, 100, 101, 100};
     std::vector<uint32_t> tri = {0, 1, 2};
     vis.AddTriangles(far, tri, "far");
     vis.Commit();
+}
+
+// A square plane y = height, 2e4 wide, facing up (counter-clockwise seen from above).
+void WidePlane(VisibilityScene& vis, float height, const char* name) {
+    std::vector<float> v = {-1e4f, height, -1e4f, -1e4f, height, 1e4f,
+                            1e4f,  height, 1e4f,  1e4f,  height, -1e4f};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+    vis.AddTriangles(v, tris, name);
+    vis.Commit();
+}
+
+TEST(DirectLight, UniformSkyOnOpenPlane) {
+    const Scene scene = SkyAlone({1, 2, 3});
+    VisibilityScene vis;
+    OpenSky(vis);
     DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
     std::vector<ReceiverPoint> pts = {{{0, 0, 0}, {0, 1, 0}, {0, 0, 0}}};
     std::vector<float> e(9);
@@ -78,6 +94,50 @@ TEST(DirectLight, UniformSkyOnOpenPlane) {
     EXPECT_NEAR(e[0], 0, 0.05);
 }
 
+// A receiver tilted from the sky's up that sees its whole sky: E is the closed form over the
+// directions above both horizons (the control variate), exact, where the fixed directions
+// alone were off by up to 2 % of pi in a component and stepped as the tilt passed them.
+TEST(DirectLight, OpenTiltedReceiverSeesItsSkyExactly) {
+    const Scene scene = SkyAlone({1, 2, 3});
+    VisibilityScene vis;
+    OpenSky(vis);
+    DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
+    for (double deg : {10.0, 37.0, 80.0, 125.0}) {
+        const double a = deg * std::numbers::pi / 180;
+        const Vec3f n(float(std::sin(a)), float(std::cos(a)), 0.2f * float(std::sin(a)));
+        const Vec3f nn = Normalize(n);
+        std::vector<ReceiverPoint> pts = {{{0, 0, 0}, nn, {0, 0, 0}, nn}};
+        std::vector<float> e(9);
+        direct.Evaluate(pts, e);
+        const std::vector<Vec3d> planes = {Vec3d{0, 1, 0}, Vec3d(nn)};
+        const Vec3d want = HalfSpacesVector(planes);
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(e[size_t(3 * c + k)], want[k] * (c + 1), 1e-5 * (c + 1)) << deg;
+    }
+}
+
+// EvaluateSky's prior: directions given as seen (or occluded) take no ray and count as such;
+// the states it reports are what a point saw. Under a roof, the traced sky is dark; with
+// every direction given as seen it is the open sky.
+TEST(DirectLight, SkyPriorTakesDirectionsWithoutRays) {
+    const Scene scene = SkyAlone({1, 1, 1});
+    VisibilityScene vis;
+    WidePlane(vis, 1, "roof");
+    DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
+    const Vec3f up{0, 1, 0};
+    std::vector<ReceiverPoint> pts = {{{0, 0, 0}, up, {0, 0, 0}, up}};
+    std::vector<float> e(9);
+    std::vector<uint8_t> states;
+    direct.EvaluateSky(pts, e, {}, &states);
+    EXPECT_NEAR(e[1], 0, 1e-6);
+    ASSERT_EQ(states.size(), direct.sky_direction_count());
+    EXPECT_TRUE(std::all_of(states.begin(), states.end(), [](uint8_t s) { return s == 1; }));
+    const std::vector<uint8_t> seen(direct.sky_direction_count(), 0);
+    direct.EvaluateSky(pts, e, seen, &states);
+    EXPECT_NEAR(e[1], std::numbers::pi, 1e-5);
+    EXPECT_TRUE(std::all_of(states.begin(), states.end(), [](uint8_t s) { return s == 0; }));
+}
 
 // The refinement's test for a shadow between a node's points: the light's centre hidden
 // from some points and seen from others.
@@ -100,10 +160,7 @@ TEST(DirectLight, VisibilityPointUnderTheSurfaceMovesOntoIt) {
     VisibilityScene vis;
     // A floor y = 0 facing up (counter-clockwise seen from above), wide enough that no sky
     // direction passes beside it from under it.
-    std::vector<float> floor = {-1e4f, 0, -1e4f, -1e4f, 0, 1e4f, 1e4f, 0, 1e4f, 1e4f, 0, -1e4f};
-    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
-    vis.AddTriangles(floor, tris, "floor");
-    vis.Commit();
+    WidePlane(vis, 0, "floor");
     const float offset = 1e-3f, reach = 0.05f;
     DirectLight direct(scene, scene.solver, vis, offset, 10, reach);
     auto sky_at = [&](float depth) {

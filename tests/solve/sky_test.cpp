@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -78,6 +79,46 @@ TEST(Sky, TiltedIrradianceMatchesBruteForce) {
     EXPECT_NEAR(SkyIrradiance(SkyModel::Uniform(1, up), {1, 0, 0}), M_PI / 2, 1e-12);
     EXPECT_NEAR(SkyIrradiance(SkyModel::CieOvercast(1, up), up), 7 * M_PI / 9, 1e-12);
     EXPECT_EQ(SkyIrradiance(SkyModel::CieOvercast(1, up), -up), 0.0);
+}
+
+// The closed form over what is above up to three planes (the sky's horizon, a receiver's
+// horizon and face) against a midpoint sum over the whole sphere (512 x 1024 cells; the
+// planes' kinks make it converge slowly, hence 2e-3).
+TEST(Sky, HalfSpacesVectorMatchesBruteForce) {
+    auto brute = [](const std::vector<Vec3d>& planes) {
+        Vec3d sum{};
+        const int nt = 512, np = 1024;
+        for (int i = 0; i < nt; ++i) {
+            const double theta = (i + 0.5) / nt * M_PI;
+            for (int j = 0; j < np; ++j) {
+                const double phi = (j + 0.5) / np * 2 * M_PI;
+                const Vec3d w{std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                              std::cos(theta)};
+                if (std::all_of(planes.begin(), planes.end(),
+                                [&](const Vec3d& p) { return Dot(w, p) >= 0; }))
+                    sum += w * (std::sin(theta) * (M_PI / nt) * (2 * M_PI / np));
+            }
+        }
+        return sum;
+    };
+    const Vec3d up{0, 0, 1};
+    // Hemisphere, wall, the same plane twice, opposite planes (nothing left).
+    EXPECT_NEAR(Length(HalfSpacesVector(std::vector<Vec3d>{up}) - up * M_PI), 0, 1e-12);
+    EXPECT_NEAR(Length(HalfSpacesVector(std::vector<Vec3d>{up, {1, 0, 0}}) -
+                       Vec3d{M_PI / 2, 0, M_PI / 2}),
+                0, 1e-12);
+    EXPECT_NEAR(Length(HalfSpacesVector(std::vector<Vec3d>{up, up * 2.0}) - up * M_PI), 0, 1e-12);
+    EXPECT_NEAR(Length(HalfSpacesVector(std::vector<Vec3d>{up, -up})), 0, 1e-12);
+    EXPECT_NEAR(Length(HalfSpacesVector(std::vector<Vec3d>{up, {}, {}}) - up * M_PI), 0, 1e-12);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> nd;
+    for (int trial = 0; trial < 12; ++trial) {
+        std::vector<Vec3d> planes = {up};
+        for (int k = 0; k < 1 + trial % 2; ++k)
+            planes.push_back(Normalize(Vec3d{nd(rng), nd(rng), nd(rng)}));
+        const Vec3d got = HalfSpacesVector(planes), want = brute(planes);
+        EXPECT_NEAR(Length(got - want), 0, 2e-3) << "trial " << trial;
+    }
 }
 
 // The solver's estimator (direct.cpp): each direction w (about +z) visible above the
