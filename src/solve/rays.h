@@ -4,7 +4,6 @@
 #include "core/vec.h"
 #include "solve/visibility.h"
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -42,14 +41,6 @@ struct SegmentBatch {
     // Segment from a to b, shortened slightly at the far end so b's own surface does
     // not count as a blocker.
     void AddSegment(const Vec3f& a, const Vec3f& b) { Add(a, b - a, 0.999f); }
-    // Segment from a towards b that stops at the sphere of `radius` around b, keeping at
-    // least half its length: for b the visibility point of an emitter sample whose transfer
-    // already holds its own shape (solver.cpp, Gatherer::CollectPairs), so that the sample's
-    // own surface near b is not a blocker either.
-    void AddSegmentToSphere(const Vec3f& a, const Vec3f& b, float radius) {
-        const float len = Length(b - a);
-        Add(a, b - a, len > 0 ? std::clamp(1.f - radius / len, 0.5f, 0.999f) : 0.999f);
-    }
     // Fills `occluded` for every segment.
     void Trace(const VisibilityScene& vis, RayKind kind = RayKind::kOther);
 };

@@ -702,7 +702,7 @@ private:
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    split_.AddSegmentToSphere(org, t.vis + t.nrm * eps_, t.radius);
+                    split_.AddSegment(org, t.vis + t.nrm * eps_);
                 }
         }
         const size_t n = split_.size();
@@ -727,12 +727,7 @@ private:
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
-    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. The
-    // segment stops at the texel's sphere (SegmentBatch::AddSegmentToSphere): the transfer
-    // already holds the texel's own shape (the cosine at the emitter, its facets), so its own
-    // surface seen at a grazing angle, hit before the ray reached its visibility point,
-    // counted that shape's self-shadowing a second time, always as a loss (lucy's bounces
-    // -6 %, bench/RESULTS.md "Issue 14 (session 12)"). A
+    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. A
     // sample's facets are read only for the pairs where they may not all face the receiver
     // point the same way (FacetsAgree); the others take TexelTransfer's answer, which
     // FacetedTransfer would give them.
@@ -768,12 +763,10 @@ private:
                     if (!rays)
                         continue;
                     if (carrier < 0)
-                        batch_.AddSegmentToSphere(org, t.vis + t.nrm * eps_, t.radius);
+                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
                     else
-                        batch_.AddSegmentToSphere(org,
-                                                  facet_vis_[size_t(carrier)] +
-                                                      facets_[size_t(carrier)].nrm * eps_,
-                                                  0.5f * t.radius);
+                        batch_.AddSegment(org, facet_vis_[size_t(carrier)] +
+                                                   facets_[size_t(carrier)].nrm * eps_);
                 }
             }
         }

@@ -3,7 +3,6 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/vec.h"
-#include "solve/rays.h"
 
 #include <gtest/gtest.h>
 
@@ -447,28 +446,6 @@ TEST(Visibility, RayRateOnABumpyHeightField) {
         EXPECT_GT(blocked, 0);
         EXPECT_LT(blocked, int(segs.size()));
     }
-}
-
-// A link's ray stops at its emitter sample's sphere (the sample's own surface there is no
-// blocker) but keeps half its length (what lies near the receiver still is).
-TEST(Visibility, SegmentToSphereIgnoresOnlyWhatLiesInsideTheSphere) {
-    VisibilityScene scene;
-    AddBlocker(&scene);  // z = 1
-    scene.Commit();
-    const Vec3f o{0, 0, 0};
-    SegmentBatch batch;
-    batch.AddSegmentToSphere(o, {0, 0, 1.2f}, 0.3f);   // the plane 0.2 from the end: inside
-    batch.AddSegmentToSphere(o, {0, 0, 1.2f}, 0.1f);   // outside the sphere: blocks
-    batch.AddSegmentToSphere(o, {0, 0, 1.8f}, 5.0f);   // kept half, 0.9 long: stops short
-    batch.AddSegmentToSphere(o, {0, 0, 2.1f}, 5.0f);   // kept half, 1.05 long: blocks
-    batch.AddSegmentToSphere(o, {0, 0, 1.0f}, 0.0f);   // radius 0: AddSegment's 0.999
-    batch.AddSegmentToSphere(o, {0, 0, 1.01f}, 0.0f);  // ... which still reaches the plane
-    batch.AddSegmentToSphere(o, o, 1.0f);              // empty: nothing to hit
-    batch.Trace(scene);
-    const std::vector<uint8_t> expect = {0, 1, 0, 1, 0, 1, 0};
-    EXPECT_EQ(batch.occluded, expect);
-    EXPECT_FLOAT_EQ(batch.segments[2].tfar, 0.5f);
-    EXPECT_FLOAT_EQ(batch.segments[4].tfar, 0.999f);
 }
 
 }  // namespace
