@@ -185,52 +185,11 @@ private:
     // lights' reuse of visibility across a patch (DirectLight::Evaluate), for the sky.
     void SkyShared(const QuadNode& node, int gl, int n_gauss, size_t probes) {
         std::vector<ProbeKey> keys(slot_.size());
-        std::vector<uint8_t> probe_states;  // probes x directions
-        const size_t nd = direct_.sky_direction_count();
-        std::vector<size_t> traced;  // probes traced now
         for (size_t k = 0; k < slot_.size(); ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
             keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), 0};
         }
-        if (probes > 0) {
-            probe_states.resize(probes * nd);
-            for (size_t k = 0; k < probes; ++k) {
-                auto it = sky_states_.find(keys[k]);
-                if (it == sky_states_.end()) {
-                    traced.push_back(k);
-                    continue;
-                }
-                std::copy(it->second.begin(), it->second.end(), &probe_states[k * nd]);
-                const auto& e = sky_cache_.at(keys[k]);
-                std::copy(e.begin(), e.end(), &e9_all_[k * 9]);
-            }
-            std::vector<ReceiverPoint> pts;
-            for (size_t k : traced)
-                pts.push_back(all_pts_[k]);
-            std::vector<float> e9(pts.size() * 9);
-            std::vector<uint8_t> st;
-            direct_.EvaluateSky(pts, e9, {}, &st);
-            for (size_t q = 0; q < traced.size(); ++q) {
-                const size_t k = traced[q];
-                std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
-                std::copy(&st[q * nd], &st[(q + 1) * nd], &probe_states[k * nd]);
-                if (slot_[k] >= n_gauss) {
-                    std::array<float, 9> rec;
-                    std::copy(&e9[q * 9], &e9[q * 9] + 9, rec.begin());
-                    sky_cache_.insert_or_assign(keys[k], rec);
-                    sky_states_.emplace(keys[k], std::vector<uint8_t>(&st[q * nd], &st[(q + 1) * nd]));
-                }
-            }
-        }
-        // A direction's state where every probe sees it or every probe finds it occluded.
-        std::vector<uint8_t> prior;
-        if (probes > 0) {
-            prior.assign(probe_states.begin(), probe_states.begin() + std::ptrdiff_t(nd));
-            for (size_t k = 1; k < probes; ++k)
-                for (size_t d = 0; d < nd; ++d)
-                    if (probe_states[k * nd + d] != prior[d])
-                        prior[d] = DirectLight::kSkyBelow;
-        }
+        const std::vector<uint8_t> prior = SkyProbes(keys, n_gauss, probes);
         std::vector<size_t> uncached;
         std::vector<ReceiverPoint> pts;
         for (size_t k = probes; k < slot_.size(); ++k) {
@@ -244,15 +203,59 @@ private:
         }
         std::vector<float> e9(pts.size() * 9);
         direct_.EvaluateSky(pts, e9, prior, nullptr);
-        for (size_t q = 0; q < uncached.size(); ++q) {
-            const size_t k = uncached[q];
-            std::copy(&e9[q * 9], &e9[q * 9] + 9, &e9_all_[k * 9]);
-            if (slot_[k] >= n_gauss) {  // only control points lie on node edges
-                std::array<float, 9> rec;
-                std::copy(&e9[q * 9], &e9[q * 9] + 9, rec.begin());
-                sky_cache_.emplace(keys[k], rec);
+        for (size_t q = 0; q < uncached.size(); ++q)
+            KeepSky(uncached[q], keys[uncached[q]], &e9[q * 9], n_gauss);
+    }
+
+    // The sky at the first `probes` points (traced in every direction, or found with their
+    // directions' states), and the directions' prior for the node's other points: a
+    // direction's state where every probe sees it or every probe finds it occluded,
+    // kSkyBelow (trace it) elsewhere. Empty without probes.
+    std::vector<uint8_t> SkyProbes(const std::vector<ProbeKey>& keys, int n_gauss, size_t probes) {
+        if (probes == 0)
+            return {};
+        const size_t nd = direct_.sky_direction_count();
+        std::vector<uint8_t> states(probes * nd);  // probes x directions
+        std::vector<size_t> traced;                // probes traced now
+        std::vector<ReceiverPoint> pts;
+        for (size_t k = 0; k < probes; ++k) {
+            auto it = sky_states_.find(keys[k]);
+            if (it == sky_states_.end()) {
+                traced.push_back(k);
+                pts.push_back(all_pts_[k]);
+                continue;
             }
+            std::copy(it->second.begin(), it->second.end(), &states[k * nd]);
+            const auto& e = sky_cache_.at(keys[k]);
+            std::copy(e.begin(), e.end(), &e9_all_[k * 9]);
         }
+        std::vector<float> e9(pts.size() * 9);
+        std::vector<uint8_t> st;
+        direct_.EvaluateSky(pts, e9, {}, &st);
+        for (size_t q = 0; q < traced.size(); ++q) {
+            const size_t k = traced[q];
+            std::copy(&st[q * nd], &st[(q + 1) * nd], &states[k * nd]);
+            if (KeepSky(k, keys[k], &e9[q * 9], n_gauss))
+                sky_states_.emplace(keys[k], std::vector<uint8_t>(&st[q * nd], &st[(q + 1) * nd]));
+        }
+        std::vector<uint8_t> prior(states.begin(), states.begin() + std::ptrdiff_t(nd));
+        for (size_t k = 1; k < probes; ++k)
+            for (size_t d = 0; d < nd; ++d)
+                if (states[k * nd + d] != prior[d])
+                    prior[d] = DirectLight::kSkyBelow;
+        return prior;
+    }
+
+    // Point k's sky e9 into e9_all_, and into the chart's cache if it lies on a node edge
+    // (only control points do: they are the neighbours' too); whether it was cached.
+    bool KeepSky(size_t k, const ProbeKey& key, const float* e9, int n_gauss) {
+        std::copy(e9, e9 + 9, &e9_all_[k * 9]);
+        if (slot_[k] < n_gauss)
+            return false;
+        std::array<float, 9> rec;
+        std::copy(e9, e9 + 9, rec.begin());
+        sky_cache_.insert_or_assign(key, rec);
+        return true;
     }
 
     // Back to Gauss and control order, then to field values.
