@@ -1,5 +1,6 @@
 #include "solve/rays.h"
 
+#include <algorithm>
 #include <atomic>
 
 namespace mebake::solve {
@@ -8,6 +9,22 @@ namespace {
 // Integer counts: order does not matter.
 std::atomic<uint64_t> g_rays[size_t(RayKind::kCount)] = {};
 }  // namespace
+
+void SegmentBatch::AddSegmentToSample(const Vec3f& a, const Vec3f& b, const Vec3f& base,
+                                      const Vec3f& n, float radius, float relief) {
+    const Vec3f d = b - a;
+    const float len = Length(d);
+    float t = 0.999f;
+    if (len > 0 && radius > 0) {
+        const float in_sphere = 1.f - radius / len;
+        // The height above the sample's plane falls linearly along the segment: where it
+        // comes down to `relief` the segment enters the slab (0: starts in it, 1: never).
+        const float ha = Dot(a - base, n), hb = Dot(b - base, n);
+        const float in_slab = hb >= relief ? 1.f : ha <= relief ? 0.f : (ha - relief) / (ha - hb);
+        t = std::clamp(std::max(in_sphere, in_slab), 0.5f, 0.999f);
+    }
+    Add(a, d, t);
+}
 
 void SegmentBatch::Trace(const VisibilityScene& vis, RayKind kind) {
     occluded.assign(segments.size(), 0);

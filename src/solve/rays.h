@@ -41,6 +41,14 @@ struct SegmentBatch {
     // Segment from a to b, shortened slightly at the far end so b's own surface does
     // not count as a blocker.
     void AddSegment(const Vec3f& a, const Vec3f& b) { Add(a, b - a, 0.999f); }
+    // Segment from a towards b, for b just above an emitter sample whose real points lie
+    // within `radius` of b and within `relief` of the plane through `base` with unit normal
+    // `n` (the side a is on). It stops where it is inside both that sphere and that slab,
+    // where the sample's own surface may be all it meets, keeping at least half its length.
+    // A flat sample (relief below b's height) keeps AddSegment's segment, so another
+    // surface beside the sample (a box standing on it) still blocks.
+    void AddSegmentToSample(const Vec3f& a, const Vec3f& b, const Vec3f& base, const Vec3f& n,
+                            float radius, float relief);
     // Fills `occluded` for every segment.
     void Trace(const VisibilityScene& vis, RayKind kind = RayKind::kOther);
 };

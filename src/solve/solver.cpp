@@ -30,6 +30,15 @@ double Since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// How far the real points of a part (centre pos, unit normal nrm; within `radius` of pos
+// and within `relief` of its own plane) can lie from the plane through base with unit
+// normal n: its offset, its rim lifted by its tilt, and its own relief.
+float ReliefOf(const Vec3f& base, const Vec3f& n, const Vec3f& pos, const Vec3f& nrm, float radius,
+               float relief) {
+    const float c = std::min(1.f, std::abs(Dot(nrm, n)));
+    return std::abs(Dot(pos - base, n)) + radius * std::sqrt(1.f - c * c) + relief;
+}
+
 }  // namespace
 
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
@@ -197,6 +206,10 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     const auto& g = sc.geometry.At(top + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
+                    Emitter::Texel& t = lv[size_t(j) * n + i];
+                    if (g.area > 0)
+                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, g.position,
+                                                               g.normal, g.radius, 0.f));
                 }
     }
     // Coarser samples: area-weighted means.
@@ -224,12 +237,16 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 t.area = area;
                 t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
                 t.db = area > 0 ? db / area : Vec3f{};
-                // The region's normal cone (link_refine.h), from its finest samples'.
+                // The region's normal cone (link_refine.h), from its finest samples', and
+                // its relief, from its children's.
                 NormalCone cone{t.nrm, 0};
                 for (uint32_t c = 0; c < 4; ++c) {
                     const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
-                    if (k.area > 0)
-                        cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                    if (k.area <= 0)
+                        continue;
+                    cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                    t.relief = std::max(t.relief,
+                                        ReliefOf(t.vis, t.nrm, k.pos, k.nrm, k.radius, k.relief));
                 }
                 t.cone = cone.angle;
                 // And its tight sphere: around the children's and their sample points (a
@@ -702,7 +719,8 @@ private:
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    split_.AddSegment(org, t.vis + t.nrm * eps_);
+                    split_.AddSegmentToSample(org, t.vis + t.nrm * eps_, t.vis, t.nrm, t.radius,
+                                              t.relief);
                 }
         }
         const size_t n = split_.size();
@@ -763,10 +781,13 @@ private:
                     if (!rays)
                         continue;
                     if (carrier < 0)
-                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                        batch_.AddSegmentToSample(org, t.vis + t.nrm * eps_, t.vis, t.nrm,
+                                                  t.radius, t.relief);
                     else
-                        batch_.AddSegment(org, facet_vis_[size_t(carrier)] +
-                                                   facets_[size_t(carrier)].nrm * eps_);
+                        batch_.AddSegmentToSample(org,
+                                                  facet_vis_[size_t(carrier)] +
+                                                      facets_[size_t(carrier)].nrm * eps_,
+                                                  t.vis, t.nrm, 0.5f * t.radius, t.relief);
                 }
             }
         }

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/vec.h"
+#include "solve/rays.h"
 
 #include <gtest/gtest.h>
 
@@ -446,6 +447,32 @@ TEST(Visibility, RayRateOnABumpyHeightField) {
         EXPECT_GT(blocked, 0);
         EXPECT_LT(blocked, int(segs.size()));
     }
+}
+
+// A link's ray stops where it is inside both its emitter sample's sphere and the slab of
+// the sample's relief (what it meets there may be the sample's own surface), keeping half
+// its length; a surface above the slab (a box standing beside a flat sample) still blocks.
+TEST(Visibility, SegmentToSampleIgnoresOnlyTheSamplesOwnSlab) {
+    VisibilityScene scene;
+    AddBlocker(&scene);  // z = 1
+    scene.Commit();
+    const Vec3f o{0, 0, 0}, n{0, 0, -1};  // samples at z = h facing o, ends 0.01 above them
+    auto end = [](float h) { return Vec3f{0, 0, h - 0.01f}; };
+    auto at = [](float h) { return Vec3f{0, 0, h}; };
+    SegmentBatch batch;
+    batch.AddSegmentToSample(o, end(1.2f), at(1.2f), n, 0.3f, 0.25f);  // plane in both: free
+    batch.AddSegmentToSample(o, end(1.2f), at(1.2f), n, 0.3f, 0.1f);   // above the slab
+    batch.AddSegmentToSample(o, end(1.2f), at(1.2f), n, 0.1f, 0.25f);  // outside the sphere
+    batch.AddSegmentToSample(o, end(1.2f), at(1.2f), n, 0.3f, 0.f);    // flat: AddSegment's
+    batch.AddSegmentToSample(o, end(1.8f), at(1.8f), n, 5.f, 5.f);     // half kept, 0.895 long
+    batch.AddSegmentToSample(o, end(2.1f), at(2.1f), n, 5.f, 5.f);     // half kept, 1.045 long
+    batch.AddSegmentToSample(o, o, at(1.2f), n, 1.f, 1.f);             // empty: nothing to hit
+    batch.Trace(scene);
+    const std::vector<uint8_t> expect = {0, 1, 1, 1, 0, 1, 0};
+    EXPECT_EQ(batch.occluded, expect);
+    EXPECT_FLOAT_EQ(batch.segments[0].tfar, (1.2f - 0.25f) / 1.19f);
+    EXPECT_FLOAT_EQ(batch.segments[3].tfar, 0.999f);
+    EXPECT_FLOAT_EQ(batch.segments[4].tfar, 0.5f);
 }
 
 }  // namespace
