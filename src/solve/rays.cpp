@@ -10,20 +10,33 @@ namespace {
 std::atomic<uint64_t> g_rays[size_t(RayKind::kCount)] = {};
 }  // namespace
 
-void SegmentBatch::AddSegmentToSample(const Vec3f& a, const Vec3f& b, const Vec3f& base,
-                                      const Vec3f& n, float radius, float relief) {
+namespace {
+
+// Where a segment of length `len` starting at a sample's point leaves that sample's sphere
+// and slab (SampleBound), as a fraction of its length: h0, h1 are its heights above the
+// sample's plane at its start and end (h0 below h1). 0: it starts outside either.
+float LeavesSample(const SampleBound& s, float len, float h0, float h1) {
+    if (s.radius <= 0 || h0 >= s.relief)
+        return 0.f;
+    const float out_slab = h1 <= s.relief ? 1.f : (s.relief - h0) / (h1 - h0);
+    return std::min(s.radius / len, out_slab);
+}
+
+}  // namespace
+
+void SegmentBatch::AddSegmentBetween(const Vec3f& a, const Vec3f& b, const SampleBound& at_a,
+                                     const SampleBound& at_b) {
     const Vec3f d = b - a;
     const float len = Length(d);
-    float t = 0.999f;
-    if (len > 0 && radius > 0) {
-        const float in_sphere = 1.f - radius / len;
-        // The height above the sample's plane falls linearly along the segment: where it
-        // comes down to `relief` the segment enters the slab (0: starts in it, 1: never).
-        const float ha = Dot(a - base, n), hb = Dot(b - base, n);
-        const float in_slab = hb >= relief ? 1.f : ha <= relief ? 0.f : (ha - relief) / (ha - hb);
-        t = std::clamp(std::max(in_sphere, in_slab), 0.5f, 0.999f);
+    if (len <= 0) {
+        Add(a, d, 0.999f);
+        return;
     }
-    Add(a, d, t);
+    // The heights above each sample's plane run linearly along the segment.
+    const float near = LeavesSample(at_a, len, Dot(a - at_a.base, at_a.n), Dot(b - at_a.base, at_a.n));
+    const float far = LeavesSample(at_b, len, Dot(b - at_b.base, at_b.n), Dot(a - at_b.base, at_b.n));
+    segments.push_back(Segment{a.x, a.y, a.z, std::min(near, 0.25f), d.x, d.y, d.z,
+                               std::clamp(1.f - far, 0.5f, 0.999f)});
 }
 
 void SegmentBatch::Trace(const VisibilityScene& vis, RayKind kind) {

@@ -164,7 +164,7 @@ private:
             float cone = 0;    // every sampled normal within lies within this angle of nrm
             // Its real points lie within `relief` of the plane through vis with normal nrm
             // (ReliefOf; the finest geometry texels taken as flat): the slab where a link
-            // ray's end may meet only the sample's own surface (AddSegmentToSample).
+            // ray's end may meet only the sample's own surface (AddSegmentBetween).
             float relief = 0;
             Vec3f hull;        // a tight sphere around the texel's real points and samples
             float hull_radius = 0;
