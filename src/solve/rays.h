@@ -25,6 +25,14 @@ enum class RayKind : int {
 inline constexpr const char* kRayKindNames[] = {"classify", "penumbra", "sky",   "link",
                                                 "other",    "cluster",  "origin"};
 
+// A sample's own surface as a link ray sees it (solver.cpp, Gatherer): its real points lie
+// within `radius` of the ray's end point on it and within `relief` of the plane through
+// `base` with unit normal `n`, which faces the ray's other end.
+struct SampleBound {
+    Vec3f base, n;
+    float radius = 0, relief = 0;
+};
+
 struct SegmentBatch {
     std::vector<Segment> segments;
     std::vector<uint8_t> occluded;
@@ -41,6 +49,14 @@ struct SegmentBatch {
     // Segment from a to b, shortened slightly at the far end so b's own surface does
     // not count as a blocker.
     void AddSegment(const Vec3f& a, const Vec3f& b) { Add(a, b - a, 0.999f); }
+    // Segment from a receiver point a to an emitter sample's point b, each just above its
+    // sample (SampleBound), that leaves out where it is inside both a sample's sphere and
+    // its slab: only there may it meet nothing but that sample's own surface, whose shape
+    // the pair's transfer already holds. It keeps [0.25, 0.5] at least, so what lies between
+    // the samples still blocks; on flat samples (relief below the points' heights) it is
+    // AddSegment's segment, and another surface beside a sample (a box standing on it) blocks.
+    void AddSegmentBetween(const Vec3f& a, const Vec3f& b, const SampleBound& at_a,
+                           const SampleBound& at_b);
     // Fills `occluded` for every segment.
     void Trace(const VisibilityScene& vis, RayKind kind = RayKind::kOther);
 };

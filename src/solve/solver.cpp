@@ -30,6 +30,15 @@ double Since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// How far the real points of a part (centre pos, unit normal nrm; within `radius` of pos
+// and within `relief` of its own plane) can lie from the plane through base with unit
+// normal n: its offset, its rim lifted by its tilt, and its own relief.
+float ReliefOf(const Vec3f& base, const Vec3f& n, const Vec3f& pos, const Vec3f& nrm, float radius,
+               float relief) {
+    const float c = std::min(1.f, std::abs(Dot(nrm, n)));
+    return std::abs(Dot(pos - base, n)) + radius * std::sqrt(1.f - c * c) + relief;
+}
+
 }  // namespace
 
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
@@ -197,6 +206,10 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     const auto& g = sc.geometry.At(top + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
+                    Emitter::Texel& t = lv[size_t(j) * n + i];
+                    if (g.area > 0)
+                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, g.position,
+                                                               g.normal, g.radius, 0.f));
                 }
     }
     // Coarser samples: area-weighted means.
@@ -224,12 +237,16 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 t.area = area;
                 t.nrm = Length(nrm) > 0 ? Normalize(nrm) : g.normal;
                 t.db = area > 0 ? db / area : Vec3f{};
-                // The region's normal cone (link_refine.h), from its finest samples'.
+                // The region's normal cone (link_refine.h), from its finest samples', and
+                // its relief, from its children's.
                 NormalCone cone{t.nrm, 0};
                 for (uint32_t c = 0; c < 4; ++c) {
                     const auto& k = fine[size_t(2 * j + (c >> 1)) * fm + 2 * i + (c & 1)];
-                    if (k.area > 0)
-                        cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                    if (k.area <= 0)
+                        continue;
+                    cone = Enclose(t.nrm, cone, NormalCone{k.nrm, k.cone});
+                    t.relief = std::max(t.relief,
+                                        ReliefOf(t.vis, t.nrm, k.pos, k.nrm, k.radius, k.relief));
                 }
                 t.cone = cone.angle;
                 // And its tight sphere: around the children's and their sample points (a
@@ -690,10 +707,12 @@ private:
         while (ls < top && size_t(ng_ * ng_) << (2 * (ls - lk.level)) < 2 * want)
             ++ls;
         NodePoints(lk.node);
+        ReceiverBounds(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         split_.Clear();
-        for (const ReceiverPoint& rp : pts_) {
+        for (size_t p = 0; p < pts_.size(); ++p) {
+            const ReceiverPoint& rp = pts_[p];
             const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b)
                 for (uint32_t a = 0; a < span; ++a) {
@@ -702,7 +721,8 @@ private:
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    split_.AddSegment(org, t.vis + t.nrm * eps_);
+                    split_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
+                                             {t.vis, t.nrm, t.radius, t.relief});
                 }
         }
         const size_t n = split_.size();
@@ -726,12 +746,43 @@ private:
         return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
+    // The own samples of the node's receiver points (pts_) for their link rays
+    // (SegmentBatch::AddSegmentBetween): the geometry texel each Gauss point is sampled from
+    // (GaussPoints' level) and its children's relief about the point's plane, the finest
+    // geometry texels taken as flat (as an emitter sample's, Texel::relief).
+    void ReceiverBounds(size_t node) {
+        if (node == bounds_node_)
+            return;
+        bounds_node_ = node;
+        const QuadNode& nd = field_.node(node);
+        const int gl = std::min(finest_, int(nd.level) + 2);
+        const uint32_t res = 1u << gl;
+        bounds_.clear();
+        for (int p = 0; p < ng_ * ng_; ++p) {
+            double s, t, w;
+            GaussPoint2D(ng_, p, &s, &t, &w);
+            const uint32_t i = std::min(res - 1, uint32_t(nd.U(s) * res));
+            const uint32_t j = std::min(res - 1, uint32_t(nd.V(t) * res));
+            const ReceiverPoint& rp = pts_[size_t(p)];
+            SampleBound b{rp.vis_point, rp.normal, sc_.geometry.At(gl, i, j).radius, 0.f};
+            for (uint32_t c = 0; c < 4 && gl < finest_; ++c) {
+                const auto& k = sc_.geometry.At(gl + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
+                if (k.area > 0)
+                    b.relief = std::max(b.relief, ReliefOf(rp.vis_point, rp.normal, k.position,
+                                                           k.normal, k.radius, 0.f));
+            }
+            bounds_.push_back(b);
+        }
+    }
+
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. A
     // sample's facets are read only for the pairs where they may not all face the receiver
     // point the same way (FacetsAgree); the others take TexelTransfer's answer, which
     // FacetedTransfer would give them.
     void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
+        if (rays)
+            ReceiverBounds(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const int top = int(em.levels.size()) - 1;
         const bool faceted = ls < top || !em.facets.empty();
@@ -763,10 +814,14 @@ private:
                     if (!rays)
                         continue;
                     if (carrier < 0)
-                        batch_.AddSegment(org, t.vis + t.nrm * eps_);
+                        batch_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
+                                                 {t.vis, t.nrm, t.radius, t.relief});
                     else
-                        batch_.AddSegment(org, facet_vis_[size_t(carrier)] +
-                                                   facets_[size_t(carrier)].nrm * eps_);
+                        batch_.AddSegmentBetween(org,
+                                                 facet_vis_[size_t(carrier)] +
+                                                     facets_[size_t(carrier)].nrm * eps_,
+                                                 bounds_[p],
+                                                 {t.vis, t.nrm, 0.5f * t.radius, t.relief});
                 }
             }
         }
@@ -786,6 +841,8 @@ private:
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
+    std::vector<SampleBound> bounds_;  // ReceiverBounds(): of pts_, for node bounds_node_
+    size_t bounds_node_ = SIZE_MAX;
     std::vector<Vec3f> albedo_;
     static constexpr size_t kPointSlots = 1024;  // x 9 points x 60 B at M2: 0.55 MB
     std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX

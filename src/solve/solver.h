@@ -162,6 +162,10 @@ private:
             Vec3f db;          // unshot radiosity (area-weighted mean over the texel)
             float db_max = 0;  // largest luminance of db within the texel
             float cone = 0;    // every sampled normal within lies within this angle of nrm
+            // Its real points lie within `relief` of the plane through vis with normal nrm
+            // (ReliefOf; the finest geometry texels taken as flat): the slab where a link
+            // ray's end may meet only the sample's own surface (AddSegmentBetween).
+            float relief = 0;
             Vec3f hull;        // a tight sphere around the texel's real points and samples
             float hull_radius = 0;
             FacetSpread spread;  // of its facets (transfer.h): its children, or `facets`

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/vec.h"
+#include "solve/rays.h"
 
 #include <gtest/gtest.h>
 
@@ -446,6 +447,50 @@ TEST(Visibility, RayRateOnABumpyHeightField) {
         EXPECT_GT(blocked, 0);
         EXPECT_LT(blocked, int(segs.size()));
     }
+}
+
+// A link's ray leaves out where it is inside both a sample's sphere and the slab of its
+// relief, at either end (what it meets there may be that sample's own surface), keeping
+// [0.25, 0.5]; a surface above the slab (a box beside a flat sample) still blocks.
+TEST(Visibility, SegmentBetweenSamplesIgnoresOnlyTheirOwnSlabs) {
+    VisibilityScene scene;
+    AddBlocker(&scene);  // z = 1
+    scene.Commit();
+    const Vec3f o{0, 0, 0}, down{0, 0, -1}, up{0, 0, 1};
+    const SampleBound none{o, up, 0.f, 0.f};
+    // Emitter samples at z = h facing o, the ray's end 0.01 above them.
+    auto end = [](float h) { return Vec3f{0, 0, h - 0.01f}; };
+    auto emitter = [&](float h, float radius, float relief) {
+        return SampleBound{{0, 0, h}, down, radius, relief};
+    };
+    SegmentBatch batch;
+    batch.AddSegmentBetween(o, end(1.2f), none, emitter(1.2f, 0.3f, 0.25f));  // in both: free
+    batch.AddSegmentBetween(o, end(1.2f), none, emitter(1.2f, 0.3f, 0.1f));   // above the slab
+    batch.AddSegmentBetween(o, end(1.2f), none, emitter(1.2f, 0.1f, 0.25f));  // outside the sphere
+    batch.AddSegmentBetween(o, end(1.2f), none, emitter(1.2f, 0.3f, 0.f));    // flat: AddSegment's
+    batch.AddSegmentBetween(o, end(1.8f), none, emitter(1.8f, 5.f, 5.f));     // half kept: 0.895
+    batch.AddSegmentBetween(o, end(2.1f), none, emitter(2.1f, 5.f, 5.f));     // half kept: 1.045
+    batch.AddSegmentBetween(o, o, none, emitter(1.2f, 1.f, 1.f));             // empty
+    // Receiver samples at z = h facing up, the ray's start 0.01 above them, towards z = 2.
+    const Vec3f top{0, 0, 2};
+    auto start = [](float h) { return Vec3f{0, 0, h + 0.01f}; };
+    auto receiver = [&](float h, float radius, float relief) {
+        return SampleBound{{0, 0, h}, up, radius, relief};
+    };
+    batch.AddSegmentBetween(start(0.8f), top, receiver(0.8f, 0.3f, 0.25f), none);  // free
+    batch.AddSegmentBetween(start(0.8f), top, receiver(0.8f, 0.3f, 0.1f), none);   // blocks
+    batch.AddSegmentBetween(start(0.8f), top, receiver(0.8f, 0.1f, 0.25f), none);  // blocks
+    batch.AddSegmentBetween(start(0.5f), top, receiver(0.5f, 5.f, 5.f), none);     // from z 0.8825
+    batch.AddSegmentBetween(start(0.8f), top, receiver(0.8f, 5.f, 5.f), none);     // from z 1.1075
+    batch.Trace(scene);
+    const std::vector<uint8_t> expect = {0, 1, 1, 1, 0, 1, 0, 0, 1, 1, 1, 0};
+    EXPECT_EQ(batch.occluded, expect);
+    EXPECT_FLOAT_EQ(batch.segments[0].tfar, (1.2f - 0.25f) / 1.19f);
+    EXPECT_FLOAT_EQ(batch.segments[3].tfar, 0.999f);
+    EXPECT_FLOAT_EQ(batch.segments[4].tfar, 0.5f);
+    EXPECT_FLOAT_EQ(batch.segments[3].tnear, 0.f);
+    EXPECT_FLOAT_EQ(batch.segments[7].tnear, (0.25f - 0.01f) / 1.19f);
+    EXPECT_FLOAT_EQ(batch.segments[10].tnear, 0.25f);
 }
 
 }  // namespace
