@@ -9,7 +9,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <unistd.h>
@@ -18,23 +17,15 @@ namespace {
 
 namespace fs = std::filesystem;
 using mebake::e2e::Capture;
+using mebake::e2e::ReadFile;
 
 const std::string kBin = MEBAKE_BINARY;
-
-std::string Slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(f)), {});
-}
 
 TEST(SkySettingsE2e, BadValuesAreClearErrorsAndTheOptInIsDeterministic) {
     const fs::path tmp = fs::temp_directory_path() / ("mebake-sky-" + std::to_string(::getpid()));
     fs::create_directories(tmp);
-    const std::string rock = std::string(MEBAKE_SOURCE_DIR) + "/data/samples/rock.ply";
     const std::string bake = (tmp / "rock.mebake").string();
-    ASSERT_EQ(
-        Capture(kBin + " -q ingest " + rock + " -o " + bake + " --lightmap-resolution 256 2>&1")
-            .code,
-        0);
+    ASSERT_EQ(mebake::e2e::IngestSampleRock(bake), 0);
     const fs::path bad = tmp / "bad.json", deep = tmp / "deep.json", plain = tmp / "plain.json";
     std::ofstream(bad) << R"({"default_rig": true, "solver": {"sky_extra_levels": 12}})";
     std::ofstream(deep)
@@ -47,12 +38,12 @@ TEST(SkySettingsE2e, BadValuesAreClearErrorsAndTheOptInIsDeterministic) {
 
     auto solve = [&](const fs::path& scene, int threads, nlohmann::json* stats) {
         const fs::path sp = tmp / "stats.json";
-        const auto run = Capture(kBin + " -q solve " + bake + " -f --scene " + scene.string() +
-                                 " --threads " + std::to_string(threads) + " --stats " +
-                                 sp.string() + " 2>&1");
+        const auto run =
+            Capture(kBin + " -q solve " + bake + " -f --scene " + scene.string() + " --threads " +
+                    std::to_string(threads) + " --stats " + sp.string() + " 2>&1");
         EXPECT_EQ(run.code, 0) << run.out;
-        *stats = nlohmann::json::parse(Slurp(sp));
-        return Slurp(fs::path(bake) / "solve" / "solution.bin");
+        *stats = nlohmann::json::parse(ReadFile(sp));
+        return ReadFile(bake + "/solve/solution.bin");
     };
     nlohmann::json s_plain, s_deep1, s_deep2;
     solve(plain, 2, &s_plain);

@@ -456,21 +456,28 @@ TEST(Solver, HorizonFollowsAThinFeaturesRim) {
 // No light refines the floor's quadtree, so the sky is what subdivides it (GatherSky).
 // Measured: worst 3.6 % of pi L (at x = 0.03, a third of the wall's height away); 4.1 %
 // with the split to sky_level alone, 24 % gathered at min_level's nodes (the old rule).
-TEST(Solver, SkyBesideAWallMatchesTheStripFormFactor) {
-    TestScene ts;
-    ts.scene.per_input = {{Mat(0.0f)}};
-    ts.scene.sky.type = Sky::Type::Uniform;
-    ts.scene.sky.radiance = {1, 1, 1};
-    ts.scene.sky.up = {0, 1, 0};
-    // Floor x in [0.01, 4.01], z in [-2, 2] at y = 0; wall x = 0, height 0.1 (the light
-    // changes within a few tenths of a level-2 node), z in [-200, 200].
-    ts.Add(MakePatch([](double u, double v) { return Vec3d(4 * u + 0.01, 0, 2 - 4 * v); }, 128, 0,
-                     4));
-    const float h = 0.1f;
+// The sky alone (uniform, L = 1, up +y) over the floor x in [0.01, 4.01], z in [-2, 2] at
+// y = 0 (one chart of res x res texels), beside the wall x = 0, height kWallHeight (the
+// light changes within a few tenths of a level-2 node), z in [-200, 200].
+constexpr float kWallHeight = 0.1f;
+void FloorBesideAWall(TestScene* ts, int res) {
+    ts->scene.per_input = {{Mat(0.0f)}};
+    ts->scene.sky.type = Sky::Type::Uniform;
+    ts->scene.sky.radiance = {1, 1, 1};
+    ts->scene.sky.up = {0, 1, 0};
+    ts->Add(MakePatch([](double u, double v) { return Vec3d(4 * u + 0.01, 0, 2 - 4 * v); }, res,
+                      0, 4));
+    const float h = kWallHeight;
     std::vector<float> wall = {0, 0, -200, 0, h, -200, 0, h, 200, 0, 0, 200};
     std::vector<uint32_t> wall_tris = {0, 1, 2, 0, 2, 3};
-    ts.vis.AddTriangles(wall, wall_tris, "wall");
-    ts.vis.Commit();
+    ts->vis.AddTriangles(wall, wall_tris, "wall");
+    ts->vis.Commit();
+}
+
+TEST(Solver, SkyBesideAWallMatchesTheStripFormFactor) {
+    TestScene ts;
+    FloorBesideAWall(&ts, 128);
+    const float h = kWallHeight;
     SolveOptions opt;
     opt.settings.max_bounces = 0;
     opt.settings.sky_directions = 1024;
@@ -496,17 +503,8 @@ TEST(Solver, SkyBesideAWallMatchesTheStripFormFactor) {
 TEST(Solver, SkyFitFloorSkipsTheDirectionsSteps) {
     auto solve = [](int extra, double floor) {
         TestScene ts;
-        ts.scene.per_input = {{Mat(0.0f)}};
-        ts.scene.sky.type = Sky::Type::Uniform;
-        ts.scene.sky.radiance = {1, 1, 1};
-        ts.scene.sky.up = {0, 1, 0};
-        ts.Add(MakePatch([](double u, double v) { return Vec3d(4 * u + 0.01, 0, 2 - 4 * v); },
-                         256, 0, 4));
-        const float h = 0.1f;
-        std::vector<float> wall = {0, 0, -200, 0, h, -200, 0, h, 200, 0, 0, 200};
-        std::vector<uint32_t> wall_tris = {0, 1, 2, 0, 2, 3};
-        ts.vis.AddTriangles(wall, wall_tris, "wall");
-        ts.vis.Commit();
+        FloorBesideAWall(&ts, 256);
+        const float h = kWallHeight;
         SolveOptions opt;
         opt.settings.max_bounces = 0;
         opt.settings.sky_extra_levels = extra;
