@@ -94,6 +94,13 @@ double DirectLight::EmittedPower() const {
     return p;
 }
 
+float DirectLight::SkyDirectionShare() const {
+    if (!has_sky() || sky_dirs_.empty())
+        return 0;
+    const double l = std::max({sky_.radiance.x, sky_.radiance.y, sky_.radiance.z});
+    return float(l * 2 * std::numbers::pi / double(sky_dirs_.size()));
+}
+
 bool DirectLight::ReachedByALight(const ReceiverPoint& rp) const {
     ReceiverPoint without_face = rp;
     without_face.face = {};

@@ -112,6 +112,9 @@ public:
     void EvaluateSky(std::span<const ReceiverPoint> points, std::span<float> out,
                      std::span<const uint8_t> prior, std::vector<uint8_t>* states) const;
     size_t sky_direction_count() const { return sky_dirs_.size(); }
+    // The most one sky direction adds to a component of E: the sky's largest radiance times
+    // the solid angle a direction stands for (2 pi / N).
+    float SkyDirectionShare() const;
     bool empty() const { return !has_lights() && !has_sky(); }
     // Power leaving the emitters (W), for the stopping rule and energy checks.
     double EmittedPower() const;

@@ -554,16 +554,17 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
 // the lights left, it was sampled at min_level where no light refined (the side away from
 // the key, creases, undersides), and 3 x 3 points per node missed where its visibility
 // turns: the bunny under the sky alone had RMS 9.6 %, mean -3.3 % (bench/RESULTS.md,
-// "Issue 14 (session 6)"). Below sky_level a node is split, up to kSkyExtraLevels deeper,
+// "Issue 14 (session 6)"). Below sky_level a node is split, up to sky_extra_levels deeper,
 // where its fit misses the sky at its control grid by more than the tolerance (scale as in
-// FitDirectLights); smaller quadrature steps of the fixed directions are not detail worth
-// refining for.
+// FitDirectLights) and by more than sky_fit_floor directions' shares of E: a point's sky
+// steps by one share as a fixed direction passes from seen to occluded, so a smaller miss
+// is mostly the directions' own steps, which a finer node follows but does not correct.
 void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level) {
-    constexpr int kSkyExtraLevels = 2;
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1, gc = order + 2;
-    const int deepest = std::min(max_level, sky_level + kSkyExtraLevels);
+    const int deepest = std::min(max_level, sky_level + opt_.settings.sky_extra_levels);
     const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
+    const float steps = float(opt_.settings.sky_fit_floor) * direct.SkyDirectionShare();
     DirectSampler sampler(*this, charts_[chart], order, max_level, direct);
     sampler.parts = DirectLight::kSky;
     sampler.use_probes = true;  // small nodes: directions shared with the probes (SkyShared)
@@ -585,7 +586,7 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
                 const float scale = std::max(
                     {MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
                 split = ControlGridError(order, gc, coeffs.data(), blocks,
-                                         sampler.ctrl_vals.data()) > tol * scale;
+                                         sampler.ctrl_vals.data()) > std::max(tol * scale, steps);
                 if (split && node.leaf())
                     field.Subdivide(n);
             }

@@ -156,6 +156,12 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->light_samples = s.value("light_samples", o->light_samples);
     o->cluster_links = s.value("cluster_links", o->cluster_links);
     o->link_tolerance = s.value("link_tolerance", o->link_tolerance);
+    o->sky_extra_levels = s.value("sky_extra_levels", o->sky_extra_levels);
+    o->sky_fit_floor = s.value("sky_fit_floor", o->sky_fit_floor);
+    if (o->sky_extra_levels < 0 || o->sky_extra_levels > 8)
+        InputError({scene_file}, "solver.sky_extra_levels must be 0..8");
+    if (!(o->sky_fit_floor >= 0))
+        InputError({scene_file}, "solver.sky_fit_floor must be >= 0");
     if (o->order < 0 || o->order > 3) InputError({scene_file}, "solver.order must be 0..3");
     const std::string multi =
         s.value("multi_emitter", std::string(o->multi_emitter_simplify ? "simplify" : "full"));

@@ -57,6 +57,12 @@ struct SolverSettings {
     bool multi_emitter_simplify = true;
     bool cluster_links = true;    // far receivers through cluster links (cluster_links.cpp)
     double link_tolerance = 1;    // error-driven link refinement (link_refine.h); 0: off
+    // The sky's refinement below its gathering level (Solver::GatherSky): at most this many
+    // levels deeper, and only where its fit misses by more than sky_fit_floor sky
+    // directions' shares of E as well as by the tolerance (0: the tolerance alone).
+    // Opt-in deeper sky: 4 and 4 (docs/method.md, "Sky").
+    int sky_extra_levels = 2;
+    double sky_fit_floor = 0;
 };
 
 struct Scene {

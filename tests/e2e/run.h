@@ -5,6 +5,8 @@
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <sys/wait.h>
 
@@ -41,6 +43,18 @@ inline RunResult Capture(const std::string& line) {
 // `mebake ARGS` (the binary under test); ARGS is shell text, quote paths in it.
 inline int Mebake(const std::string& args) {
     return Shell(std::string("'") + MEBAKE_BINARY + "' " + args);
+}
+
+// A whole file's bytes (empty if it cannot be read).
+inline std::string ReadFile(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
+// Ingests the sample rock (data/samples/rock.ply) with a 256-texel light map into bake.
+inline int IngestSampleRock(const std::string& bake) {
+    return Mebake("-q ingest '" + std::string(MEBAKE_SOURCE_DIR) + "/data/samples/rock.ply' -o '" +
+                  bake + "' --lightmap-resolution 256");
 }
 
 }  // namespace mebake::e2e
