@@ -5,6 +5,7 @@
 #include "core/check.h"
 
 #include <cmath>
+#include <cstdint>
 
 namespace mebake::solve {
 namespace {
@@ -62,6 +63,17 @@ struct Tables {
     // Two-scale matrices per order and child, N x N row-major, double and float.
     double two_scale[kMaxOrder + 1][4][kMaxCoeffs * kMaxCoeffs];
     float two_scale_f[kMaxOrder + 1][4][kMaxCoeffs * kMaxCoeffs];
+    // two_scale_f without its zeros (about 70 % of it at M2: the restriction of a Legendre
+    // polynomial to a half has no component of higher degree), row by row: row m's entries
+    // are [sparse_row[m], sparse_row[m + 1]) of sparse_col / sparse_val, in column order.
+    // Push and Pull skip the zeros: with finite coefficients a product with 0 is +-0, which
+    // leaves a round-to-nearest sum started at +0 unchanged, so the bits are the dense ones.
+    struct Sparse {
+        uint16_t row[kMaxCoeffs + 1];
+        uint8_t col[kMaxCoeffs * kMaxCoeffs];
+        float val[kMaxCoeffs * kMaxCoeffs];
+    };
+    Sparse sparse[kMaxOrder + 1][4];
 
     Tables() {
         for (int n = 1; n <= kMaxGauss; ++n) {
@@ -115,6 +127,21 @@ struct Tables {
                         }
                     }
                 }
+            }
+            for (int c = 0; c < 4; ++c) {
+                Sparse& sp = sparse[order][c];
+                int e = 0;
+                for (int row = 0; row < nn; ++row) {
+                    sp.row[row] = uint16_t(e);
+                    for (int col = 0; col < nn; ++col) {
+                        const float v = two_scale_f[order][c][row * nn + col];
+                        if (v != 0) {
+                            sp.col[e] = uint8_t(col);
+                            sp.val[e++] = v;
+                        }
+                    }
+                }
+                sp.row[nn] = uint16_t(e);
             }
         }
     }
@@ -278,15 +305,15 @@ namespace {
 template <bool kAdd>
 void PushImpl(int order, int child, const float* parent, int count, float* out) {
     CHECK(order >= 0 && order <= kMaxOrder && child >= 0 && child < 4);
-    const float* p = T().two_scale_f[order][child];
+    const Tables::Sparse& p = T().sparse[order][child];
     const int nn = NumCoeffs(order);
     for (int b = 0; b < count; ++b) {
         const float* x = parent + b * nn;
         float* y = out + b * nn;
         for (int m = 0; m < nn; ++m) {
             float v = 0;
-            for (int k = 0; k < nn; ++k)
-                v += p[m * nn + k] * x[k];
+            for (int e = p.row[m]; e < p.row[m + 1]; ++e)
+                v += p.val[e] * x[p.col[e]];
             if constexpr (kAdd) {
                 y[m] += v;
             } else {
@@ -312,12 +339,12 @@ void Pull(int order, const float* const children[4], int count, float* parent) {
     for (int b = 0; b < count; ++b) {
         float acc[kMaxCoeffs] = {};
         for (int c = 0; c < 4; ++c) {
-            const float* p = tab.two_scale_f[order][c];
+            const Tables::Sparse& p = tab.sparse[order][c];
             const float* y = children[c] + b * nn;
             for (int m = 0; m < nn; ++m) {
                 const float ym = y[m];
-                for (int k = 0; k < nn; ++k)
-                    acc[k] += p[m * nn + k] * ym;
+                for (int e = p.row[m]; e < p.row[m + 1]; ++e)
+                    acc[p.col[e]] += p.val[e] * ym;
             }
         }
         for (int k = 0; k < nn; ++k)
