@@ -268,8 +268,9 @@ TEST(Basis, PullOfPushIsIdentity) {
     }
 }
 
-// Push and Pull skip the two-scale matrices' zeros (basis.cpp): the bits must be those of
-// the dense products, summed in the same order, for coefficients of both signs and zeros.
+// Push and Pull run with compile-time sizes and Push's loops turned (basis.cpp): the bits
+// must be those of the plain products, each output summed in the same order, for
+// coefficients of both signs and zeros.
 TEST(Basis, PushAndPullGiveTheDenseProductsBits) {
     std::mt19937 rng(8);
     std::uniform_real_distribution<float> u(-3.f, 3.f);
