@@ -25,19 +25,8 @@ bool NearTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e
     return true;
 }
 
-bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, const PairGeometry& g,
-                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
-                     int* carrier) {
-    *carrier = -1;
-    int toward = 0, real = 0;
-    for (const TexelSource& f : facets) {
-        if (f.area <= 0)
-            continue;
-        ++real;
-        toward += Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)) > 0 ? 1 : 0;
-    }
-    if (toward == 0 || toward == real)
-        return TexelTransfer(x, n, t, g, texel_side, e);  // all one way: the mean decides
+bool MixedFacetsTransfer(const Vec3f& x, const Vec3f& n, std::span<const TexelSource> facets,
+                         double texel_side, Vec3d* e, int* carrier) {
     *e = Vec3d(0, 0, 0);
     double most = 0;
     bool any = false;

@@ -66,10 +66,26 @@ inline bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
 // x, or all of it when the mean faced away (bench/RESULTS.md, "Issue 14 (session 10)").
 // *carrier: the facet that carries the most of it, or -1 for the sample as a whole (the
 // caller's visibility ray ends there).
-// g = GeometryOf(x, t), as in TexelTransfer.
-bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, const PairGeometry& g,
-                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
-                     int* carrier);
+// g = GeometryOf(x, t), as in TexelTransfer. Inline for the gather's inner loop; the
+// facets' own sum is MixedFacetsTransfer (*carrier as here, which it leaves at -1 when
+// no facet carries light).
+bool MixedFacetsTransfer(const Vec3f& x, const Vec3f& n, std::span<const TexelSource> facets,
+                         double texel_side, Vec3d* e, int* carrier);
+inline bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                            const PairGeometry& g, std::span<const TexelSource> facets,
+                            double texel_side, Vec3d* e, int* carrier) {
+    *carrier = -1;
+    int toward = 0, real = 0;
+    for (const TexelSource& f : facets) {
+        if (f.area <= 0)
+            continue;
+        ++real;
+        toward += Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)) > 0 ? 1 : 0;
+    }
+    if (toward == 0 || toward == real)
+        return TexelTransfer(x, n, t, g, texel_side, e);  // all one way: the mean decides
+    return MixedFacetsTransfer(x, n, facets, texel_side, e, carrier);
+}
 inline bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
                             std::span<const TexelSource> facets, double texel_side, Vec3d* e,
                             int* carrier) {
