@@ -62,6 +62,7 @@ struct Tables {
     // Two-scale matrices per order and child, N x N row-major, double and float.
     double two_scale[kMaxOrder + 1][4][kMaxCoeffs * kMaxCoeffs];
     float two_scale_f[kMaxOrder + 1][4][kMaxCoeffs * kMaxCoeffs];
+    float two_scale_ft[kMaxOrder + 1][4][kMaxCoeffs * kMaxCoeffs];  // transposed (Push)
 
     Tables() {
         for (int n = 1; n <= kMaxGauss; ++n) {
@@ -111,6 +112,7 @@ struct Tables {
                                 int col = CoeffIndex(order, ik, jk);
                                 two_scale[order][c][row * nn + col] = v;
                                 two_scale_f[order][c][row * nn + col] = float(v);
+                                two_scale_ft[order][c][col * nn + row] = float(v);
                             }
                         }
                     }
@@ -275,24 +277,59 @@ const double* TwoScaleMatrix(int order, int child) {
 }
 
 namespace {
+// Push and Pull with the matrix size a compile-time constant (one instance per order): the
+// compiler unrolls the products and computes the independent outputs side by side (4x
+// faster Pull at M2 than with N known at run time), each output still summed in the
+// order written, so the bits are those of the plain loops.
+// pt: the two-scale matrix transposed, so that every output m takes its k-th term at once.
+template <int kN, bool kAdd>
+void PushN(const float* pt, const float* parent, int count, float* out) {
+    for (int b = 0; b < count; ++b) {
+        const float* x = parent + b * kN;
+        float* y = out + b * kN;
+        float v[kN] = {};
+        for (int k = 0; k < kN; ++k) {
+            const float xk = x[k];
+            for (int m = 0; m < kN; ++m)
+                v[m] += pt[k * kN + m] * xk;
+        }
+        for (int m = 0; m < kN; ++m) {
+            if constexpr (kAdd) {
+                y[m] += v[m];
+            } else {
+                y[m] = v[m];
+            }
+        }
+    }
+}
+
+template <int kN>
+void PullN(const float* const p[4], const float* const children[4], int count, float* parent) {
+    for (int b = 0; b < count; ++b) {
+        float acc[kN] = {};
+        for (int c = 0; c < 4; ++c) {
+            const float* y = children[c] + b * kN;
+            for (int m = 0; m < kN; ++m) {
+                const float ym = y[m];
+                for (int k = 0; k < kN; ++k)
+                    acc[k] += p[c][m * kN + k] * ym;
+            }
+        }
+        for (int k = 0; k < kN; ++k)
+            parent[b * kN + k] = 0.25f * acc[k];
+    }
+}
+
 template <bool kAdd>
 void PushImpl(int order, int child, const float* parent, int count, float* out) {
     CHECK(order >= 0 && order <= kMaxOrder && child >= 0 && child < 4);
-    const float* p = T().two_scale_f[order][child];
-    const int nn = NumCoeffs(order);
-    for (int b = 0; b < count; ++b) {
-        const float* x = parent + b * nn;
-        float* y = out + b * nn;
-        for (int m = 0; m < nn; ++m) {
-            float v = 0;
-            for (int k = 0; k < nn; ++k)
-                v += p[m * nn + k] * x[k];
-            if constexpr (kAdd) {
-                y[m] += v;
-            } else {
-                y[m] = v;
-            }
-        }
+    const float* p = T().two_scale_ft[order][child];
+    static_assert(kMaxOrder == 3);
+    switch (order) {
+    case 0: return PushN<1, kAdd>(p, parent, count, out);
+    case 1: return PushN<4, kAdd>(p, parent, count, out);
+    case 2: return PushN<9, kAdd>(p, parent, count, out);
+    default: return PushN<16, kAdd>(p, parent, count, out);
     }
 }
 }  // namespace
@@ -307,21 +344,13 @@ void PushAdd(int order, int child, const float* parent, int count, float* child_
 
 void Pull(int order, const float* const children[4], int count, float* parent) {
     CHECK(order >= 0 && order <= kMaxOrder);
-    const Tables& tab = T();
-    const int nn = NumCoeffs(order);
-    for (int b = 0; b < count; ++b) {
-        float acc[kMaxCoeffs] = {};
-        for (int c = 0; c < 4; ++c) {
-            const float* p = tab.two_scale_f[order][c];
-            const float* y = children[c] + b * nn;
-            for (int m = 0; m < nn; ++m) {
-                const float ym = y[m];
-                for (int k = 0; k < nn; ++k)
-                    acc[k] += p[m * nn + k] * ym;
-            }
-        }
-        for (int k = 0; k < nn; ++k)
-            parent[b * nn + k] = 0.25f * acc[k];
+    const auto& ts = T().two_scale_f[order];
+    const float* const p[4] = {ts[0], ts[1], ts[2], ts[3]};
+    switch (order) {
+    case 0: return PullN<1>(p, children, count, parent);
+    case 1: return PullN<4>(p, children, count, parent);
+    case 2: return PullN<9>(p, children, count, parent);
+    default: return PullN<16>(p, children, count, parent);
     }
 }
 

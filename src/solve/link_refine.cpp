@@ -28,10 +28,13 @@ double MaxCosine(const Vec3f& dir, double spread, const NormalCone& cone) {
 }  // namespace
 
 NormalCone ConeAround(const Vec3f& axis, const Vec3f* normals, size_t count) {
-    NormalCone c{axis, 0};
+    // The widest normal is the one of the smallest cosine: one acos per cone, not one per
+    // normal (acos decreases, so it is the largest of the angles to the bit).
+    double lowest = 1;
     for (size_t k = 0; k < count; ++k)
         if (Dot(normals[k], normals[k]) > 0)
-            c.angle = std::max(c.angle, float(AngleBetween(axis, Normalize(normals[k]))));
+            lowest = std::min(lowest, std::clamp(double(Dot(axis, Normalize(normals[k]))), -1.0, 1.0));
+    NormalCone c{axis, float(std::acos(lowest))};
     if (c.angle >= kHalfPi)
         c.angle = float(std::numbers::pi);
     return c;
@@ -69,9 +72,12 @@ void SphereBuilder::Get(const Vec3f& fallback_c, float fallback_r, Vec3f* c, flo
 
 double ConeLinkBound(double db_max, double power, const LinkSide& r, const LinkSide& e) {
     // Touching or not: the band of directions both sides allow.
+    // psi >= the cones' angles, and where those reach 1.1 (past pi / 3, with the cosine's
+    // rounding far below the gap) 2 (1 - cos psi) > 1: band is 1 without the axes' angle.
     double band = 1;
-    if (r.cone.angle < kHalfPi && e.cone.angle < kHalfPi) {
-        const double psi = r.cone.angle + e.cone.angle + AngleBetween(r.cone.axis, e.cone.axis);
+    const float cones = r.cone.angle + e.cone.angle;
+    if (r.cone.angle < kHalfPi && e.cone.angle < kHalfPi && cones < 1.1f) {
+        const double psi = cones + AngleBetween(r.cone.axis, e.cone.axis);
         band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
     }
     const Vec3f d = e.center - r.center;

@@ -45,16 +45,18 @@ namespace {
 
 // Signed side of x: +1 in front, -1 behind, 0 on the plane (relative tolerance) or degenerate.
 int Side(std::span<const Vec3d> polygon, const Vec3d& normal, const Vec3d& x) {
-    double scale = 0;
     Vec3d centroid;
     for (const Vec3d& v : polygon)
         centroid += v;
     centroid = centroid / double(polygon.size());
+    // The largest distance from the centroid, with one square root: sqrt is correctly
+    // rounded, hence monotonic, so this is the largest of the lengths to the bit.
+    double scale2 = 0;
     for (const Vec3d& v : polygon)
-        scale = std::max(scale, Length(v - centroid));
+        scale2 = std::max(scale2, Dot(v - centroid, v - centroid));
     const double d = Dot(normal, x - centroid);
-    scale = std::max(scale, Length(x - centroid));
-    if (!(std::abs(d) > 1e-14 * scale))
+    scale2 = std::max(scale2, Dot(x - centroid, x - centroid));
+    if (!(std::abs(d) > 1e-14 * std::sqrt(scale2)))
         return 0;
     return d > 0 ? 1 : -1;
 }

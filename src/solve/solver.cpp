@@ -799,14 +799,17 @@ private:
                     if (t.area <= 0 || t.db_max <= 0)
                         continue;
                     const TexelSource src{t.pos, t.nrm, t.area};
+                    const PairGeometry g = GeometryOf(rp.position, src);
                     Vec3d contrib;
                     int carrier = -1;
-                    if (!faceted || FacetsAgree(rp.position, src, t.spread)) {
-                        if (!TexelTransfer(rp.position, rp.normal, src, texel_side, &contrib))
+                    if (!faceted || FacetsAgree(g, t.spread)) {
+                        if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
                             continue;
                     } else {
+                        if (BelowHorizon(g, rp.normal, t.spread))
+                            continue;  // FacetedTransfer's answer, without the facets
                         em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
-                        if (!FacetedTransfer(rp.position, rp.normal, src, facets_, texel_side,
+                        if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
                                              &contrib, &carrier))
                             continue;
                     }

@@ -8,10 +8,8 @@
 
 namespace mebake::solve {
 
-namespace {
-
 // The texel as a square of its area in its tangent plane, clipped to x's upper half-space.
-bool NearField(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e) {
+bool NearTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e) {
     const Vec3f nz = t.nrm;
     const Vec3f ref = std::abs(nz.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
     const Vec3f tu = Normalize(Cross(ref, nz)), tv = Cross(nz, tu);
@@ -27,38 +25,8 @@ bool NearField(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e) {
     return true;
 }
 
-}  // namespace
-
-bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double texel_side,
-                   Vec3d* e) {
-    const Vec3d d = Vec3d(t.pos) - Vec3d(x);
-    const double r2 = Dot(d, d);
-    if (r2 < 1e-20)
-        return false;
-    if (Dot(d, Vec3d(n)) <= 0)
-        return false;  // below the receiver's horizon
-    const double ce = -Dot(d, Vec3d(t.nrm));
-    if (ce <= 0)
-        return false;  // the emitter faces away
-    if (r2 < 4 * texel_side * texel_side)
-        return NearField(x, n, t, e);
-    *e = d * (double(t.area) * ce / (std::numbers::pi * r2 * r2));
-    return true;
-}
-
-bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
-                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
-                     int* carrier) {
-    *carrier = -1;
-    int toward = 0, real = 0;
-    for (const TexelSource& f : facets) {
-        if (f.area <= 0)
-            continue;
-        ++real;
-        toward += Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)) > 0 ? 1 : 0;
-    }
-    if (toward == 0 || toward == real)
-        return TexelTransfer(x, n, t, texel_side, e);  // all one way: the mean decides
+bool MixedFacetsTransfer(const Vec3f& x, const Vec3f& n, std::span<const TexelSource> facets,
+                         double texel_side, Vec3d* e, int* carrier) {
     *e = Vec3d(0, 0, 0);
     double most = 0;
     bool any = false;
@@ -89,12 +57,8 @@ FacetSpread SpreadOf(const TexelSource& t, std::span<const TexelSource> facets) 
     }
     // Margins for rounding: both sides' dot products are evaluated in double from floats
     // (relative error ~1e-15 of D + rho), and the bound is stored as floats.
-    return {float((offset + 1e-6 * reach) * (1 + 1e-5)), float(tilt + 1e-6)};
-}
-
-bool FacetsAgree(const Vec3f& x, const TexelSource& t, const FacetSpread& spread) {
-    const Vec3d d = Vec3d(x) - Vec3d(t.pos);
-    return std::abs(Dot(d, Vec3d(t.nrm))) > spread.offset + std::sqrt(Dot(d, d)) * spread.tilt;
+    return {float((offset + 1e-6 * reach) * (1 + 1e-5)), float(tilt + 1e-6),
+            float(reach * (1 + 1e-5))};
 }
 
 }  // namespace mebake::solve

@@ -10,6 +10,8 @@
 
 #include "core/vec.h"
 
+#include <cmath>
+#include <numbers>
 #include <span>
 
 namespace mebake::solve {
@@ -19,11 +21,42 @@ struct TexelSource {
     float area = 0;  // real area, world units
 };
 
+// A point-texel pair's geometry, which TexelTransfer and FacetsAgree both read: the gather
+// computes it once per pair (as separate calls the two recomputed it, and FacetsAgree,
+// TexelTransfer and FacetedTransfer were 18 % of lucy's solve).
+struct PairGeometry {
+    Vec3d d;          // t.pos - x
+    double r2 = 0;    // |d|^2
+    double ce = 0;    // -d . t.nrm: > 0 where x lies in front of the texel
+};
+inline PairGeometry GeometryOf(const Vec3f& x, const TexelSource& t) {
+    const Vec3d d = Vec3d(t.pos) - Vec3d(x);
+    return {d, Dot(d, d), -Dot(d, Vec3d(t.nrm))};
+}
+
+// The near form (below): the texel as a square clipped to x's upper half-space.
+bool NearTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, Vec3d* e);
+
 // Adds nothing and returns false when the texel cannot light x: it lies below x's tangent
 // plane, faces away from x, coincides with x, or (near form) is wholly below the horizon.
-// `texel_side` is the side of the texel's level, which picks the form.
-bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double texel_side,
-                   Vec3d* e);
+// `texel_side` is the side of the texel's level, which picks the form. g = GeometryOf(x, t).
+inline bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                          const PairGeometry& g, double texel_side, Vec3d* e) {
+    if (g.r2 < 1e-20)
+        return false;
+    if (Dot(g.d, Vec3d(n)) <= 0)
+        return false;  // below the receiver's horizon
+    if (g.ce <= 0)
+        return false;  // the emitter faces away
+    if (g.r2 < 4 * texel_side * texel_side)
+        return NearTransfer(x, n, t, e);
+    *e = g.d * (double(t.area) * g.ce / (std::numbers::pi * g.r2 * g.r2));
+    return true;
+}
+inline bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                          double texel_side, Vec3d* e) {
+    return TexelTransfer(x, n, t, GeometryOf(x, t), texel_side, e);
+}
 
 // The same for a sample `t` that stands for finer facets (its normal their area-weighted
 // mean, the same unit radiosity; `facets` may be empty). Where the facets do not all face
@@ -33,22 +66,64 @@ bool TexelTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t, double 
 // x, or all of it when the mean faced away (bench/RESULTS.md, "Issue 14 (session 10)").
 // *carrier: the facet that carries the most of it, or -1 for the sample as a whole (the
 // caller's visibility ray ends there).
-bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
-                     std::span<const TexelSource> facets, double texel_side, Vec3d* e,
-                     int* carrier);
+// g = GeometryOf(x, t), as in TexelTransfer. Inline for the gather's inner loop; the
+// facets' own sum is MixedFacetsTransfer (*carrier as here, which it leaves at -1 when
+// no facet carries light).
+bool MixedFacetsTransfer(const Vec3f& x, const Vec3f& n, std::span<const TexelSource> facets,
+                         double texel_side, Vec3d* e, int* carrier);
+inline bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                            const PairGeometry& g, std::span<const TexelSource> facets,
+                            double texel_side, Vec3d* e, int* carrier) {
+    *carrier = -1;
+    int toward = 0, real = 0;
+    for (const TexelSource& f : facets) {
+        if (f.area <= 0)
+            continue;
+        ++real;
+        toward += Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)) > 0 ? 1 : 0;
+    }
+    if (toward == 0 || toward == real)
+        return TexelTransfer(x, n, t, g, texel_side, e);  // all one way: the mean decides
+    return MixedFacetsTransfer(x, n, facets, texel_side, e, carrier);
+}
+inline bool FacetedTransfer(const Vec3f& x, const Vec3f& n, const TexelSource& t,
+                            std::span<const TexelSource> facets, double texel_side, Vec3d* e,
+                            int* carrier) {
+    return FacetedTransfer(x, n, t, GeometryOf(x, t), facets, texel_side, e, carrier);
+}
 
 // How far a sample's facets can disagree with the sample as a whole about the side of them
 // a point x lies on: with D = |x - t.pos|, every facet's (x - f.pos) . f.nrm lies within
 // offset + D x tilt of (x - t.pos) . t.nrm, since their difference is
 // (x - f.pos) . (f.nrm - t.nrm) + (t.pos - f.pos) . t.nrm (rounding included).
+// `reach`: no facet's centre lies further than that from the sample's (plus the margin).
 struct FacetSpread {
-    float offset = 0, tilt = 0;
+    float offset = 0, tilt = 0, reach = 0;
 };
 FacetSpread SpreadOf(const TexelSource& t, std::span<const TexelSource> facets);
 
 // True when that bound proves every facet (of area > 0) faces x the way the sample does:
 // FacetedTransfer then gives TexelTransfer's bits, so the caller may skip the facets (most
 // pairs: the facet test was 16 % of lucy's solve). False: not known, ask FacetedTransfer.
-bool FacetsAgree(const Vec3f& x, const TexelSource& t, const FacetSpread& spread);
+// g = GeometryOf(x, t): |g.ce| is |(x - t.pos) . t.nrm| to the bit (IEEE subtraction is
+// antisymmetric); the square root only where the offset alone does not decide.
+inline bool FacetsAgree(const PairGeometry& g, const FacetSpread& spread) {
+    const double side = std::abs(g.ce);
+    return side > spread.offset && side > spread.offset + std::sqrt(g.r2) * spread.tilt;
+}
+inline bool FacetsAgree(const Vec3f& x, const TexelSource& t, const FacetSpread& spread) {
+    return FacetsAgree(GeometryOf(x, t), spread);
+}
+
+// True when the sample's centre and every facet's lie below the tangent plane of x (normal
+// n, unit): FacetedTransfer then returns false, whatever the facets (each part's transfer
+// first tests its centre against x's horizon), so the caller need not read them. The
+// facets' centres lie within spread.reach of the sample's; the margin covers the rounding
+// of both sides' dot products (relative ~1e-16 of |d|_1 + reach) and of |n| (1e-7).
+inline bool BelowHorizon(const PairGeometry& g, const Vec3f& n, const FacetSpread& spread) {
+    const double h = Dot(g.d, Vec3d(n));
+    const double d1 = std::abs(g.d.x) + std::abs(g.d.y) + std::abs(g.d.z);
+    return h < 0 && -h > spread.reach + 1e-9 * d1;
+}
 
 }  // namespace mebake::solve

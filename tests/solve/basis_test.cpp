@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -264,6 +265,55 @@ TEST(Basis, PullOfPushIsIdentity) {
         Pull(order, ptr, count, back.data());
         for (int i = 0; i < nn * count; ++i)
             EXPECT_NEAR(back[i], parent[i], 2e-6);
+    }
+}
+
+// Push and Pull run with compile-time sizes and Push's loops turned (basis.cpp): the bits
+// must be those of the plain products, each output summed in the same order, for
+// coefficients of both signs and zeros.
+TEST(Basis, PushAndPullGiveTheDenseProductsBits) {
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<float> u(-3.f, 3.f);
+    const int count = 9;
+    for (int order = 0; order <= kMaxOrder; ++order) {
+        const int nn = NumCoeffs(order);
+        for (int trial = 0; trial < 50; ++trial) {
+            std::vector<float> parent(size_t(nn * count)), kids[4];
+            for (float& x : parent)
+                x = trial % 5 == 0 && u(rng) < 0 ? 0.f : u(rng);
+            const float* ptr[4];
+            for (int c = 0; c < 4; ++c) {
+                const double* p = TwoScaleMatrix(order, c);
+                std::vector<float> want(size_t(nn * count)), got(size_t(nn * count), 1.f);
+                for (int b = 0; b < count; ++b)
+                    for (int m = 0; m < nn; ++m) {
+                        float v = 0;
+                        for (int k = 0; k < nn; ++k)
+                            v += float(p[m * nn + k]) * parent[size_t(b * nn + k)];
+                        want[size_t(b * nn + m)] = v;
+                    }
+                Push(order, c, parent.data(), count, got.data());
+                ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(float)), 0)
+                    << "order " << order << " child " << c;
+                kids[c] = got;
+                ptr[c] = kids[c].data();
+            }
+            std::vector<float> want(size_t(nn * count)), got(size_t(nn * count));
+            for (int b = 0; b < count; ++b) {
+                float acc[kMaxCoeffs] = {};
+                for (int c = 0; c < 4; ++c) {
+                    const double* p = TwoScaleMatrix(order, c);
+                    for (int m = 0; m < nn; ++m)
+                        for (int k = 0; k < nn; ++k)
+                            acc[k] += float(p[m * nn + k]) * ptr[c][b * nn + m];
+                }
+                for (int k = 0; k < nn; ++k)
+                    want[size_t(b * nn + k)] = 0.25f * acc[k];
+            }
+            Pull(order, ptr, count, got.data());
+            ASSERT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(float)), 0)
+                << "order " << order;
+        }
     }
 }
 

@@ -97,6 +97,42 @@ TEST(LinkRefine, ConeBoundHoldsForCosinesAtBothEnds) {
     EXPECT_GT(lit, 20);     // with light to bound
 }
 
+// ConeAround takes one acos (of the smallest cosine) and ConeLinkBound skips the axes'
+// angle where the cones alone make the band 1: both must give the bits of the plain
+// formulas (the largest of the normals' angles; band = min(1, 2 (1 - cos psi))).
+TEST(LinkRefine, ConeShortcutsGiveThePlainFormulasBits) {
+    Rng rnd;
+    for (int k = 0; k < 2000; ++k) {
+        const Vec3f axis(rnd.Tilt(Vec3d(0, 0, 1), 3.0));
+        std::vector<Vec3f> normals;
+        float widest = 0;
+        for (int i = 0; i < 1 + k % 30; ++i) {
+            const double spread = 0.02 + 2.0 * rnd();
+            const Vec3d dir = rnd.Tilt(Vec3d(axis), spread);
+            const Vec3f m(dir * (0.5 + rnd()));
+            normals.push_back(i % 7 == 6 ? Vec3f(0, 0, 0) : m);
+            if (Dot(normals.back(), normals.back()) > 0)
+                widest = std::max(widest, float(std::acos(std::clamp(
+                                              double(Dot(axis, Normalize(normals.back()))),
+                                              -1.0, 1.0))));
+        }
+        const NormalCone cone = ConeAround(axis, normals.data(), normals.size());
+        EXPECT_EQ(cone.angle, widest >= std::numbers::pi / 2 ? float(std::numbers::pi) : widest)
+            << "k " << k;
+        // Two cones at a distance, touching (the band alone) and apart.
+        const float ta = float(0.8 * rnd()), tb = float(0.8 * rnd());
+        const Vec3f aa(rnd.Dir()), ab(rnd.Tilt(Vec3d(aa), 1.0));
+        const float gap = k % 2 ? 0.f : 3.f;
+        const LinkSide a{{0, 0, 0}, 1.f, {aa, ta}}, b{{gap + 2.f, 0, 0}, 1.f, {ab, tb}};
+        const double psi = ta + tb + std::acos(std::clamp(double(Dot(aa, ab)), -1.0, 1.0));
+        const double band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
+        if (k % 2)
+            EXPECT_EQ(ConeLinkBound(2, 3, a, b), 2 * band) << "k " << k;
+        else
+            EXPECT_LE(ConeLinkBound(2, 3, a, b), 2 * band) << "k " << k;
+    }
+}
+
 // The tight sphere holds every sphere it was built from and is never larger than the
 // fallback; for a curved strip (the case it is for) it is much smaller than a sphere
 // centred on the strip's middle point.

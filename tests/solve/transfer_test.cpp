@@ -181,5 +181,55 @@ TEST(Transfer, FacetsAgreeOnlyWhereEveryFacetFacesThePointOneWay) {
     EXPECT_GT(far_agreed, 0.85 * far_points) << far_agreed << " of " << far_points;
 }
 
+// BelowHorizon lets the gather skip the facets of a sample below a receiver's horizon:
+// wherever it says so, FacetedTransfer must return false (random samples of four facets as
+// above, receivers near them with random normals, some within the rounding margin), and it
+// must say so for most receivers that see the whole sample well below their horizon.
+TEST(Transfer, BelowHorizonOnlyWhereNoFacetCanPass) {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    auto random_unit = [&](const Vec3f& around, float spread) {
+        return Normalize(around + Vec3f(u(rng), u(rng), u(rng)) * spread);
+    };
+    int below = 0, deep = 0, deep_below = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const float side = 0.1f;
+        const Vec3f centre(u(rng), u(rng), u(rng));
+        const Vec3f axis = random_unit({0, 0, 0}, 1.f);
+        TexelSource facets[4];
+        for (auto& f : facets) {
+            const float area = u(rng) < -0.8f ? 0.f : side * side / 4;
+            f = {centre + Vec3f(u(rng), u(rng), u(rng)) * (side / 2), random_unit(axis, 1.f),
+                 area};
+        }
+        const TexelSource t{centre, axis, side * side};
+        const FacetSpread spread = SpreadOf(t, facets);
+        const Vec3f x = centre + Vec3f(u(rng), u(rng), u(rng)) * (trial % 2 ? 0.3f : 2.f);
+        Vec3f n = random_unit({0, 0, 0}, 1.f);
+        if (trial % 50 == 0)  // a facet's centre just on the horizon
+            n = Normalize(Cross(facets[0].pos - x, Vec3f(0, 0, 1)));
+        const PairGeometry g = GeometryOf(x, t);
+        // The highest of the centres above x's tangent plane (facets of zero area do not count).
+        double highest = Dot(Vec3d(t.pos) - Vec3d(x), Vec3d(n));
+        for (const auto& f : facets)
+            if (f.area > 0)
+                highest = std::max(highest, Dot(Vec3d(f.pos) - Vec3d(x), Vec3d(n)));
+        const bool is_deep = highest < -0.2 * side;
+        deep += is_deep ? 1 : 0;
+        if (!BelowHorizon(g, n, spread))
+            continue;
+        ++below;
+        deep_below += is_deep ? 1 : 0;
+        Vec3d e;
+        int carrier = 7;
+        ASSERT_FALSE(FacetedTransfer(x, n, t, facets, side, &e, &carrier)) << "trial " << trial;
+        ASSERT_LE(highest, 0) << "trial " << trial;
+    }
+    EXPECT_GT(below, 2000);
+    // Receivers with the sample and its facets a fifth of its side below the horizon: the
+    // bound (the facets within `reach` of the centre, in every direction) finds most.
+    EXPECT_GT(deep_below, 0.5 * deep) << deep_below << " of " << deep;
+}
+
 }  // namespace
 }  // namespace mebake::solve
