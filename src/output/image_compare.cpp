@@ -244,8 +244,11 @@ RuleSplit SplitByRule(const ComparedImage& image, const ComparedImage& ref,
     if (!(mean > 0))
         InputError({ref.path}, "the reference is black where it is compared");
     RuleSplit s;
-    s.slope = ll > 0 ? dl / ll : 0;  // a rule that loses nothing: nothing carried
     s.rule_rms = std::sqrt(ll / values) / mean;
+    // A rule that loses nothing but float rounding (every face flat: the two pictures agree
+    // to ~1e-7) has no direction to carry: k would be noise over rounding.
+    constexpr double kNoLoss = 1e-5;
+    s.slope = s.rule_rms > kNoLoss ? dl / ll : 0;
     s.carried_rms = std::abs(s.slope) * s.rule_rms;
     // |d - k l|^2 = |d|^2 - k <d, l> (least squares: the residual is orthogonal to l).
     s.rest_rms = std::sqrt(std::max(0.0, dd - s.slope * dl) / values) / mean;

@@ -80,7 +80,8 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
 //   carried  |k| x the rule picture's RMS: the image's error along the rule's loss,
 //   rest     RMS of d - k l: the rest (the field's own error and the reference's noise).
 // All relative to the reference's mean, as CompareImages; k = 0 when the rule picture
-// loses nothing (a flat scene). Throws as CompareImages.
+// loses nothing but float rounding (relative RMS <= 1e-5: a flat scene). Throws as
+// CompareImages.
 struct RuleSplit {
     double rule_rms = 0;  // the rule picture against the reference
     double slope = 0;     // k
