@@ -47,6 +47,9 @@ int RunCompareImages(const CompareCommand& c) {
         UsageError("--borders: {} has no chart channel (a `mebake reference --image` EXR has)",
                    c.reference);
     const output::ImageDifference d = output::CompareImages(image, ref, tone, m);
+    std::optional<output::RuleSplit> split;
+    if (!c.rule.empty())
+        split = output::SplitByRule(image, ref, output::ReadComparedImage(c.rule), tone, m);
     if (!d.masked)
         spdlog::warn("compare: no coverage channel (A) in either picture or --mask: every pixel, "
                      "the background too, is compared");
@@ -64,6 +67,11 @@ int RunCompareImages(const CompareCommand& c) {
     if (d.silhouette_rms)
         noise += fmt::format("; at the silhouette ({} pixels) {:.2f}%", d.silhouette_pixels,
                              100 * *d.silhouette_rms);
+    if (split)
+        noise += fmt::format("; the rule picture {:.2f}%, of it carried x{:.2f}: {:.2f}%, the rest "
+                             "{:.2f}%",
+                             100 * split->rule_rms, split->slope, 100 * split->carried_rms,
+                             100 * split->rest_rms);
     spdlog::info("{} vs {}: {} pixels, relative RMS {:.2f}%{}, bias {:+.2f}%, p95 {:.2f}%, "
                  "max {:.1f}%; display RMS {:.2f}% ({})",
                  c.dir, c.reference, d.pixels, 100 * d.relative_rms, noise,
@@ -94,6 +102,13 @@ int RunCompareImages(const CompareCommand& c) {
     if (d.silhouette_rms) {
         j["silhouette_pixels"] = d.silhouette_pixels;
         j["silhouette_rms"] = *d.silhouette_rms;
+    }
+    if (split) {
+        j["rule"] = c.rule;
+        j["rule_rms"] = split->rule_rms;
+        j["rule_slope"] = split->slope;
+        j["rule_carried_rms"] = split->carried_rms;
+        j["rule_rest_rms"] = split->rest_rms;
     }
     if (!c.diff.empty())
         j["diff"] = c.diff;

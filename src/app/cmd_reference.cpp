@@ -12,10 +12,13 @@
 #include "solve/solution.h"
 #include "stream/trimesh.h"
 
+#include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 namespace mebake::app {
 
@@ -63,6 +66,26 @@ Vec3d ReadVec3(const json& j, const std::string& file, size_t i, const char* key
         v[k] = j[key][size_t(k)].get<double>();
     }
     return v;
+}
+
+// The reference's vector irradiance per point ("E": 3 colours x 3 axes), or none when a
+// point lacks it (an older reference).
+std::vector<std::array<Vec3d, 3>> ReadIrradiance(const json& points, const std::string& file) {
+    std::vector<std::array<Vec3d, 3>> e(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+        const json& p = points[i];
+        if (!p.contains("E"))
+            return {};
+        const json& ej = p["E"];
+        for (size_t c = 0; c < 3; ++c)
+            for (size_t k = 0; k < 3; ++k) {
+                if (!ej.is_array() || ej.size() != 3 || !ej[c].is_array() || ej[c].size() != 3 ||
+                    !ej[c][k].is_number())
+                    InputError({file}, "point {}: 'E' must be 3 arrays of 3 numbers", i);
+                e[i][c][int(k)] = ej[c][k].get<double>();
+            }
+    }
+    return e;
 }
 
 output::ProbeError Score(const output::BakeView& view, const std::vector<output::ProbeSite>& sites,
@@ -201,6 +224,7 @@ int RunCompare(const CompareCommand& c) {
         ref.push_back(ReadVec3(p, c.reference, i, "B"));
         se.push_back(ReadVec3(p, c.reference, i, "B_se"));
     }
+    const std::vector<std::array<Vec3d, 3>> ref_e = ReadIrradiance(r["points"], c.reference);
     const output::BakeView view =
         output::OpenBakeView(c.dir, output::FieldLoading::All,
                              c.no_stitch ? output::SeamStitching::Off : output::SeamStitching::On);
@@ -213,10 +237,30 @@ int RunCompare(const CompareCommand& c) {
     j["reference"] = c.reference;
     j["order"] = view.solution.fields.empty() ? -1 : view.solution.fields[0].order();
     j["error"] = ErrorJson(e);
+    // The display rule with the reference's own E (docs/accuracy.md): what the light map's
+    // representation loses at these points even with an exact field.
+    std::vector<Vec3d> rule;
+    if (!ref_e.empty() && !view.solution.radiosity) {
+        for (size_t i = 0; i < values.size(); ++i)
+            rule.push_back(output::DisplayRule(values[i], ref_e[i].data()));
+        const output::ProbeError re = output::CompareRadiosity(ref, se, rule);
+        spdlog::info("the display rule with the reference's E: relative RMS {:.2f}%",
+                     100 * re.relative_rms);
+        j["rule_error"] = ErrorJson(re);
+    }
     if (c.points) {
         json pts = json::array();
-        for (size_t i = 0; i < values.size(); ++i)
-            pts.push_back({{"B", J(ref[i])}, {"bake_B", J(values[i].b)}});
+        for (size_t i = 0; i < values.size(); ++i) {
+            json p = {{"B", J(ref[i])}, {"bake_B", J(values[i].b)}};
+            if (!rule.empty()) {
+                p["rule_B"] = J(rule[i]);
+                // Degrees between the shading normal and the face's: where the rule loses.
+                const double cos_tilt =
+                    std::clamp(double(Dot(values[i].normal, values[i].face_normal)), -1.0, 1.0);
+                p["tilt"] = std::acos(cos_tilt) * 180 / std::numbers::pi;
+            }
+            pts.push_back(std::move(p));
+        }
         j["points"] = std::move(pts);
     }
     WriteJson(j, c.output);

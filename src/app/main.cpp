@@ -217,6 +217,7 @@ int main(int argc, char** argv) {
     cmp_cmd->add_option("--diff-range", cmp.diff_range, "Pictures: display difference (sRGB 0..1) shown at full colour")->capture_default_str();
     cmp_cmd->add_flag("--borders", cmp.borders, "Pictures: draw the chart borders of the reference's chart channel on --diff");
     cmp_cmd->add_option("--mask", cmp.mask, "Pictures: an EXR whose coverage (A) also limits the pixels compared");
+    cmp_cmd->add_option("--rule", cmp.rule, "Pictures: the reference's rule picture (reference --rule-image): how much of the error is the display rule's loss");
     cmp_cmd->add_option("--exposure", cmp.exposure, "Pictures: exposure (EV) of the tone map for display values")->capture_default_str();
     cmp_cmd->add_option("--tonemap", cmp.tonemap, "Pictures: tone curve for display values")->capture_default_str()
         ->check(CLI::IsMember({"filmic", "reinhard", "clamp"}));

@@ -48,6 +48,7 @@ struct CompareCommand {
     std::string diff;         // false-colour difference PNG
     double diff_range = 0.1;  // display difference (sRGB 0..1) at full colour
     std::string mask;         // picture whose coverage channel A also limits the pixels
+    std::string rule;         // the reference's rule picture: split the error by it
     bool borders = false;     // draw the reference's chart borders on the difference
     double exposure = 0;
     std::string tonemap = "filmic";

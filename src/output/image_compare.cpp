@@ -209,6 +209,52 @@ ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& r
     return d;
 }
 
+RuleSplit SplitByRule(const ComparedImage& image, const ComparedImage& ref,
+                      const ComparedImage& rule, const ToneMap& tone, const ComparedImage* mask) {
+    CheckSameSize(image, ref);
+    CheckSameSize(image, rule);
+    if (mask)
+        CheckSameSize(image, *mask);
+    const bool display = !image.linear || !ref.linear || !rule.linear;
+    auto value = [&](const ComparedImage& im, size_t p, int c) {
+        return display ? double(Display(im, p, c, tone)) : double(im.rgb[3 * p + size_t(c)]);
+    };
+    // Sums over the pixels CompareImages counts (and the rule picture covers), in pixel order.
+    double sum_ref = 0, dd = 0, dl = 0, ll = 0;
+    uint64_t pixels = 0;
+    const size_t n = size_t(ref.width) * size_t(ref.height);
+    for (size_t p = 0; p < n; ++p) {
+        if (!Counted(image, p) || !Counted(ref, p) || !Counted(rule, p) ||
+            (mask && !Counted(*mask, p)))
+            continue;
+        ++pixels;
+        for (int c = 0; c < 3; ++c) {
+            const double r = value(ref, p, c);
+            const double d = value(image, p, c) - r, l = value(rule, p, c) - r;
+            sum_ref += r;
+            dd += d * d;
+            dl += d * l;
+            ll += l * l;
+        }
+    }
+    if (pixels == 0)
+        InputError({ref.path}, "no pixel covered by the object in it, {} and {}", image.path,
+                   rule.path);
+    const double values = 3 * double(pixels), mean = sum_ref / values;
+    if (!(mean > 0))
+        InputError({ref.path}, "the reference is black where it is compared");
+    RuleSplit s;
+    s.rule_rms = std::sqrt(ll / values) / mean;
+    // A rule that loses nothing but float rounding (every face flat: the two pictures agree
+    // to ~1e-7) has no direction to carry: k would be noise over rounding.
+    constexpr double kNoLoss = 1e-5;
+    s.slope = s.rule_rms > kNoLoss ? dl / ll : 0;
+    s.carried_rms = std::abs(s.slope) * s.rule_rms;
+    // |d - k l|^2 = |d|^2 - k <d, l> (least squares: the residual is orthogonal to l).
+    s.rest_rms = std::sqrt(std::max(0.0, dd - s.slope * dl) / values) / mean;
+    return s;
+}
+
 std::vector<uint8_t> DifferencePicture(const ComparedImage& image, const ComparedImage& ref,
                                        const ToneMap& tone, double range, const ComparedImage* mask,
                                        bool borders) {

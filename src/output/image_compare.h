@@ -70,6 +70,27 @@ struct ImageDifference {
 ImageDifference CompareImages(const ComparedImage& image, const ComparedImage& reference,
                               const ToneMap& tone, const ComparedImage* mask = nullptr);
 
+// How much of an image's error is the display rule's loss (docs/accuracy.md, "Pictures").
+// `rule` is the reference's rule picture (`reference --rule-image`: the light map's display
+// rule applied to the path-traced vector irradiance E at the same hits). With d = image -
+// reference and l = rule - reference over the compared pixels and colours, the slope
+// k = <d, l> / <l, l> is how much of the rule's loss the image carries (1: all of it, as a
+// bake whose receivers gathered E over the geometric normal's hemisphere would; 0: none),
+// and d splits into orthogonal parts, RMS^2 = carried^2 + rest^2:
+//   carried  |k| x the rule picture's RMS: the image's error along the rule's loss,
+//   rest     RMS of d - k l: the rest (the field's own error and the reference's noise).
+// All relative to the reference's mean, as CompareImages; k = 0 when the rule picture
+// loses nothing but float rounding (relative RMS <= 1e-5: a flat scene). Throws as
+// CompareImages.
+struct RuleSplit {
+    double rule_rms = 0;  // the rule picture against the reference
+    double slope = 0;     // k
+    double carried_rms = 0, rest_rms = 0;
+};
+RuleSplit SplitByRule(const ComparedImage& image, const ComparedImage& reference,
+                      const ComparedImage& rule, const ToneMap& tone,
+                      const ComparedImage* mask = nullptr);
+
 // A false-colour picture of the signed display error image - reference per pixel (mean
 // over colours of the sRGB values): blue below, white equal, red above, saturating at
 // +-range; pixels not compared show the reference darkened in grey. With `borders`, the

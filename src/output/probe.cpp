@@ -2,6 +2,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "solve/shading.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,11 +53,26 @@ std::vector<ProbeValue> ProbeSolution(const BakeView& view, std::span<const Prob
                 shader.Irradiance(p.uv, v.e);
                 v.uv = p.uv;
                 v.normal = p.normal;
+                const auto& f = tile.triangles[s.local_triangle];
+                v.face_normal = Normalize(Cross(tile.position[f[1]] - tile.position[f[0]],
+                                                tile.position[f[2]] - tile.position[f[0]]));
+                v.albedo = p.albedo;
+                v.emission = p.material->emission;
             }
             return 0;
         },
         [](uint32_t, const stream::ChartTile&, int) {});
     return out;
+}
+
+Vec3d DisplayRule(const ProbeValue& v, const Vec3d e[3]) {
+    float val[9];
+    for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k)
+            val[3 * c + k] = float(e[c][k]);
+    solve::Material m;
+    m.emission = v.emission;
+    return Vec3d(solve::ShadeRadiosity(val, false, v.normal, v.albedo, m));
 }
 
 ProbeError CompareRadiosity(std::span<const Vec3d> reference, std::span<const Vec3d> reference_se,

@@ -23,12 +23,20 @@ struct ProbeValue {
     Vec3f b{};        // radiosity B
     Vec3f e[3] = {};  // vector irradiance per colour (zero for a radiosity solution)
     Vec2f uv{};
-    Vec3f normal{};
+    Vec3f normal{};       // the shading normal the display uses
+    Vec3f face_normal{};  // the tile triangle's own (geometric) normal, unit
+    Vec3f albedo{};
+    Vec3f emission{};  // emitted radiance Le
 };
 
 // Reads only the tiles that hold sites. Throws Error(Input) naming the site when a chart or
 // triangle does not exist or the barycentrics are not finite.
 std::vector<ProbeValue> ProbeSolution(const BakeView& view, std::span<const ProbeSite> sites);
+
+// The light map's display rule (solve/shading.h: B = pi Le + rho (n . E)+ with the point's
+// shading normal, albedo and emission) applied to another vector irradiance e at the point:
+// with the reference's own E, what a bake whose field were exact would show there.
+Vec3d DisplayRule(const ProbeValue& v, const Vec3d e[3]);
 
 // Error of baked B against reference B over a set of points (all colours):
 //   relative RMS  = sqrt(mean |B_bake - B_ref|^2) / sqrt(mean |B_ref|^2),

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <unistd.h>
 
@@ -120,6 +121,40 @@ TEST(ImageCompare, ChartBordersSplitTheRms) {
     const auto rgb = DifferencePicture(im, ref, ToneMap{}, 0.1, nullptr, true);
     EXPECT_EQ(rgb[3] + rgb[4] + rgb[5], 0);
     EXPECT_EQ(rgb[0], 255);
+}
+
+TEST(ImageCompare, RuleSplitFindsTheCarriedShare) {
+    // Reference 1 on 4 pixels; the rule picture loses 0.2 on pixel 0 and 0.1 on pixel 1.
+    // The image carries half of that loss and has its own error of 0.1 on pixels 2 and 3
+    // (orthogonal to the loss): slope 0.5, carried 0.5 x rule RMS, and RMS^2 = carried^2 +
+    // rest^2 with rest = sqrt(2 x 0.1^2 / 4) = 7.07 %.
+    const ComparedImage ref = Flat(4, 1, 1.f);
+    ComparedImage rule = Flat(4, 1, 1.f), im = Flat(4, 1, 1.f);
+    const float loss[4] = {-0.2f, -0.1f, 0, 0}, own[4] = {0, 0, 0.1f, -0.1f};
+    for (size_t p = 0; p < 4; ++p)
+        for (int c = 0; c < 3; ++c) {
+            rule.rgb[3 * p + size_t(c)] = 1 + loss[p];
+            im.rgb[3 * p + size_t(c)] = 1 + 0.5f * loss[p] + own[p];
+        }
+    const RuleSplit s = SplitByRule(im, ref, rule, ToneMap{});
+    const double rule_rms = std::sqrt((0.04 + 0.01) / 4);
+    EXPECT_NEAR(s.rule_rms, rule_rms, 1e-6);
+    EXPECT_NEAR(s.slope, 0.5, 1e-6);
+    EXPECT_NEAR(s.carried_rms, 0.5 * rule_rms, 1e-6);
+    EXPECT_NEAR(s.rest_rms, std::sqrt(0.02 / 4), 1e-6);
+    const ImageDifference d = CompareImages(im, ref, ToneMap{});
+    EXPECT_NEAR(d.relative_rms * d.relative_rms,
+                s.carried_rms * s.carried_rms + s.rest_rms * s.rest_rms, 1e-9);
+    // The rule picture itself carries all of its loss; a rule that loses nothing (a flat
+    // scene) leaves the whole error to the rest.
+    EXPECT_NEAR(SplitByRule(rule, ref, rule, ToneMap{}).slope, 1, 1e-9);
+    EXPECT_NEAR(SplitByRule(rule, ref, rule, ToneMap{}).rest_rms, 0, 1e-6);
+    ComparedImage rounded = ref;
+    rounded.rgb[0] = std::nextafter(1.f, 2.f);  // a flat scene's rule: float rounding only
+    const RuleSplit exact = SplitByRule(im, ref, rounded, ToneMap{});
+    EXPECT_EQ(exact.slope, 0);
+    EXPECT_EQ(exact.carried_rms, 0);
+    EXPECT_NEAR(exact.rest_rms, d.relative_rms, 1e-9);
 }
 
 TEST(ImageCompare, ReadsExrAndPngAndRejectsBadInput) {

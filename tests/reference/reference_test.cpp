@@ -234,9 +234,31 @@ TEST(ReferenceTest, BakeDirectoryReferenceAndProbe) {
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(values[i].b[c], expected[c], 1e-4f * expected[c]);
     }
+    // A flat face: the shading normal is the face's, and the display rule applied to the
+    // reference's own E is the reference's B (the same paths, n . E sample by sample).
+    for (size_t i = 0; i < points.size(); ++i) {
+        EXPECT_NEAR(Dot(values[i].normal, values[i].face_normal), 1, 1e-6);
+        const Vec3d rule = output::DisplayRule(values[i], points[i].e.data());
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(rule[c], points[i].b[c], 1e-5 * points[i].b[c]);
+    }
     sites.push_back({0, 99, Vec3f(1, 0, 0)});
     EXPECT_THROW(output::ProbeSolution(view, sites), Error);
     std::filesystem::remove_all(dir);
+}
+
+// The display rule on another E: pi Le + rho (n . E)+ per colour, clamped where E points
+// below the shading normal's plane.
+TEST(ReferenceTest, DisplayRuleOfAnotherIrradiance) {
+    output::ProbeValue v;
+    v.normal = Vec3f(0, 0, 1);
+    v.albedo = Vec3f(0.5f, 0.5f, 0.5f);
+    v.emission = Vec3f(0.1f, 0, 0);
+    const Vec3d e[3] = {{0.3, 0, 2}, {5, 0, -1}, {0, 0, 4}};
+    const Vec3d b = output::DisplayRule(v, e);
+    EXPECT_NEAR(b[0], std::numbers::pi * 0.1 + 0.5 * 2, 1e-6);
+    EXPECT_NEAR(b[1], 0, 1e-12);
+    EXPECT_NEAR(b[2], 2, 1e-6);
 }
 
 TEST(ReferenceTest, CompareRadiosityMetrics) {
