@@ -50,7 +50,8 @@ public:
           nt_(l.vertices.size() - 2),
           per_t_(size_t(g_ + 1) * size_t(g_ + 1)),
           nv_(nt_ * per_t_),
-          state_(penumbra.size() * nv_, kUnknown) {
+          state_(penumbra.size() * nv_, kUnknown),
+          height_(penumbra.size() * nv_, kHeightUnknown) {
         PrepareHorizons();
     }
 
@@ -171,12 +172,23 @@ private:
             h = std::min(h, Dot(d, Vec3d(rp.face)));
         return h / std::max(Length(d), 1e-30);
     }
-    bool Above(uint32_t q, size_t v) const { return !cut_[q] || Height(q, v) >= -kHorizonMargin; }
+    // Height's verdict on a grid vertex, computed once per point and vertex (every level
+    // asks again for the corners its cells share): kWellBelow, kJustBelow or kAboveHorizon.
+    enum : uint8_t { kHeightUnknown = 0, kWellBelow, kJustBelow, kAboveHorizon };
+    uint8_t HeightClass(uint32_t q, size_t v) const {
+        uint8_t& h = height_[q * nv_ + v];
+        if (h == kHeightUnknown) {
+            const double x = Height(q, v);
+            h = x >= 0 ? kAboveHorizon : x >= -kHorizonMargin ? kJustBelow : kWellBelow;
+        }
+        return h;
+    }
+    bool Above(uint32_t q, size_t v) const { return !cut_[q] || HeightClass(q, v) != kWellBelow; }
     bool Below(const Cell& c) const {
         if (!cut_[c.q])
             return false;
         for (int k = 0; k < 3; ++k)
-            if (Height(c.q, CornerIndex(c, k)) >= 0)
+            if (HeightClass(c.q, CornerIndex(c, k)) == kAboveHorizon)
                 return false;
         return true;
     }
@@ -354,6 +366,7 @@ private:
     std::vector<uint8_t> state_;
     std::vector<double> sign_;
     std::vector<uint8_t> cut_;
+    mutable std::vector<uint8_t> height_;  // HeightClass per point and grid vertex
     SegmentBatch batch_;
     std::vector<std::pair<uint32_t, uint32_t>> asked_;  // (point, vertex)
 };

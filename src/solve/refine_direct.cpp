@@ -120,6 +120,10 @@ public:
     std::vector<uint8_t> known;
     bool use_probes = true;  // false: no shared visibility and no cache (masked evaluations)
     int parts = DirectLight::kLights;  // or kSky (GatherSky)
+    // The sky's directions taken as known at the probes (the tested parent's agreement, as
+    // DirectLight::EvaluateSky's prior; empty: all traced), and the last node's probes'
+    // agreement (SkyProbes; empty without probes).
+    std::vector<uint8_t> sky_inherited, sky_prior;
 
 private:
     // Chart coordinates of point idx: Gauss points 0..n_gauss-1, then the control grid.
@@ -183,13 +187,15 @@ private:
     // first (or found with their directions' states) and a direction all of them see, or
     // all find occluded, is taken as such at the node's other points without a ray: the
     // lights' reuse of visibility across a patch (DirectLight::Evaluate), for the sky.
+    // The probes themselves take sky_inherited (their tested parent's agreement) as known.
     void SkyShared(const QuadNode& node, int gl, int n_gauss, size_t probes) {
         std::vector<ProbeKey> keys(slot_.size());
         for (size_t k = 0; k < slot_.size(); ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
             keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), 0};
         }
-        const std::vector<uint8_t> prior = SkyProbes(keys, n_gauss, probes);
+        sky_prior = SkyProbes(keys, n_gauss, probes);
+        const std::vector<uint8_t>& prior = sky_prior;
         std::vector<size_t> uncached;
         std::vector<ReceiverPoint> pts;
         for (size_t k = probes; k < slot_.size(); ++k) {
@@ -231,7 +237,7 @@ private:
         }
         std::vector<float> e9(pts.size() * 9);
         std::vector<uint8_t> st;
-        direct_.EvaluateSky(pts, e9, {}, &st);
+        direct_.EvaluateSky(pts, e9, sky_inherited, &st);
         for (size_t q = 0; q < traced.size(); ++q) {
             const size_t k = traced[q];
             std::copy(&st[q * nd], &st[(q + 1) * nd], &states[k * nd]);
@@ -559,6 +565,11 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
 // FitDirectLights) and by more than sky_fit_floor directions' shares of E: a point's sky
 // steps by one share as a fixed direction passes from seen to occluded, so a smaller miss
 // is mostly the directions' own steps, which a finer node follows but does not correct.
+// A split node's children trace only the directions its four corner probes disagreed on
+// (the others as they found them): a direction every corner saw, or every corner found
+// occluded, was already taken so at the node's other points, and its fit missed for the
+// directions that change across it. This is what makes the deeper sky cheap: below the
+// parent, rays go only where the parent's visibility turns.
 void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level) {
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1, gc = order + 2;
@@ -569,15 +580,19 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
     sampler.parts = DirectLight::kSky;
     sampler.use_probes = true;  // small nodes: directions shared with the probes (SkyShared)
     std::vector<float> coeffs(size_t(field.stride()));
-    std::vector<size_t> stack(1, 0);
+    // Nodes to visit, each with the directions its tested parent's probes agreed on.
+    std::vector<std::pair<size_t, std::vector<uint8_t>>> stack;
+    stack.emplace_back(0, std::vector<uint8_t>{});
     while (!stack.empty()) {
-        const size_t n = stack.back();
+        const size_t n = stack.back().first;
+        sampler.sky_inherited = std::move(stack.back().second);
         stack.pop_back();
         const bool room = field.node_count() + 4 <= NodeBudget(charts_[chart]);
         if (field.node(n).leaf() && int(field.node(n).level) < sky_level && room)
             field.Subdivide(n);
         const QuadNode node = field.node(n);
         bool split = !node.leaf() && int(node.level) < sky_level;
+        std::vector<uint8_t> inherit;
         if (!split) {
             const bool test = int(node.level) < deepest && (!node.leaf() || room);
             sampler.Evaluate(node, test);
@@ -589,12 +604,14 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
                                          sampler.ctrl_vals.data()) > std::max(tol * scale, steps);
                 if (split && node.leaf())
                     field.Subdivide(n);
+                if (split)
+                    inherit = sampler.sky_prior;
             }
         }
         if (split) {
             const int32_t first = field.node(n).first_child;
             for (int c = 3; c >= 0; --c)
-                stack.push_back(size_t(first + c));
+                stack.emplace_back(size_t(first + c), inherit);
             continue;
         }
         float* pend = field.pending(n);

@@ -5,6 +5,7 @@
 #include "core/check.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -36,36 +37,41 @@ double SkyIrradiance(const SkyModel& sky, const Vec3d& n) {
 }
 
 Vec3d HalfSpacesVector(std::span<const Vec3d> planes) {
-    std::vector<Vec3d> unit;  // distinct unit normals (a plane twice would count its arc twice)
+    // Distinct unit normals (a plane twice would count its arc twice), at most three; fixed
+    // arrays, no heap: the sky calls this once per receiver point.
+    std::array<Vec3d, 3> unit;
+    size_t n = 0;
     for (const Vec3d& p : planes) {
         const double len = Length(p);
         if (len == 0)
             continue;
         const Vec3d q = p / len;
-        if (std::none_of(unit.begin(), unit.end(),
-                         [&](const Vec3d& r) { return Dot(q, r) > 1 - 1e-12; }))
-            unit.push_back(q);
+        if (std::none_of(unit.begin(), unit.begin() + std::ptrdiff_t(n),
+                         [&](const Vec3d& r) { return Dot(q, r) > 1 - 1e-12; })) {
+            CHECK_LT(n, unit.size());
+            unit[n++] = q;
+        }
     }
-    CHECK_LE(unit.size(), size_t(3));
     Vec3d sum{};
-    for (size_t i = 0; i < unit.size(); ++i) {
+    for (size_t i = 0; i < n; ++i) {
         // The great circle of plane i, c(phi) = cos phi u + sin phi v; each other plane keeps
         // the half of it centred on the plane's projection: a semicircle.
         const Vec3d& a = unit[i];
         const Vec3d t = std::abs(a.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
         const Vec3d u = Normalize(Cross(a, t)), v = Cross(a, u);
-        std::vector<double> centres;
-        for (size_t j = 0; j < unit.size(); ++j) {
+        std::array<double, 2> centres;
+        size_t nc = 0;
+        for (size_t j = 0; j < n; ++j) {
             const double x = Dot(u, unit[j]), y = Dot(v, unit[j]);
             if (j != i && x * x + y * y > 1e-24)  // else the circles coincide (opposite planes)
-                centres.push_back(std::atan2(y, x));
+                centres[nc++] = std::atan2(y, x);
         }
         // Two semicircles whose centres are d apart overlap over pi - d.
         const double arc =
-            centres.empty()       ? 2 * M_PI
-            : centres.size() == 1 ? M_PI
-                                  : std::max(0.0, M_PI - std::abs(std::remainder(
-                                                             centres[0] - centres[1], 2 * M_PI)));
+            nc == 0   ? 2 * M_PI
+            : nc == 1 ? M_PI
+                      : std::max(0.0, M_PI - std::abs(std::remainder(centres[0] - centres[1],
+                                                                     2 * M_PI)));
         sum += a * (0.5 * arc);
     }
     return sum;
