@@ -499,18 +499,17 @@ private:
     // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
+        Deferred d{uint32_t(n), 0, &em.levels[size_t(ls)], vis, pairs_.size(), 0, batch_.size()};
+        CollectPairs(em, lk, ls, vis < 0);
+        d.pair1 = pairs_.size();
+        if (d.pair1 == d.pair0)
+            return;  // no pair carries light (lucy: half the candidate pairs are in such links)
         if (n != set_node_) {  // the same node's points serve every emitter
             set_pts_.insert(set_pts_.end(), pts_.begin(), pts_.end());
             set_albedo_.insert(set_albedo_.end(), albedo_.begin(), albedo_.end());
             set_node_ = n;
         }
-        const auto& texels = em.levels[size_t(ls)];
-        Deferred d{uint32_t(n), uint32_t(set_pts_.size() - pts_.size()), &texels, vis,
-                   pairs_.size(), 0, batch_.size()};
-        CollectPairs(em, lk, ls, vis < 0);
-        d.pair1 = pairs_.size();
-        if (d.pair1 == d.pair0)
-            return;
+        d.points = uint32_t(set_pts_.size() - pts_.size());
         deferred_.push_back(d);
         if (pairs_.size() >= s_.opt_.link_defer_pairs)
             Resolve();
