@@ -499,18 +499,17 @@ private:
     // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
+        Deferred d{uint32_t(n), 0, &em.levels[size_t(ls)], vis, pairs_.size(), 0, batch_.size()};
+        CollectPairs(em, lk, ls, vis < 0);
+        d.pair1 = pairs_.size();
+        if (d.pair1 == d.pair0)
+            return;  // no pair carries light (lucy: half the candidate pairs are in such links)
         if (n != set_node_) {  // the same node's points serve every emitter
             set_pts_.insert(set_pts_.end(), pts_.begin(), pts_.end());
             set_albedo_.insert(set_albedo_.end(), albedo_.begin(), albedo_.end());
             set_node_ = n;
         }
-        const auto& texels = em.levels[size_t(ls)];
-        Deferred d{uint32_t(n), uint32_t(set_pts_.size() - pts_.size()), &texels, vis,
-                   pairs_.size(), 0, batch_.size()};
-        CollectPairs(em, lk, ls, vis < 0);
-        d.pair1 = pairs_.size();
-        if (d.pair1 == d.pair0)
-            return;
+        d.points = uint32_t(set_pts_.size() - pts_.size());
         deferred_.push_back(d);
         if (pairs_.size() >= s_.opt_.link_defer_pairs)
             Resolve();
@@ -788,6 +787,23 @@ private:
         bounds_slot_node_[slot] = node;
     }
 
+    // The bounds of the parts CollectPairs may test for link lk at level ls (transfer.h):
+    // the samples that can emit, and their facets where it reads them.
+    static RegionBound PairRegion(const Emitter& em, const Link& lk, int ls, bool faceted) {
+        const auto& texels = em.levels[size_t(ls)];
+        const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
+        const auto& et = em.levels[size_t(lk.level)][size_t(lk.j) * (1u << lk.level) + lk.i];
+        RegionBound region{et.hull, et.nrm};
+        for (uint32_t b = 0; b < span; ++b)
+            for (uint32_t a = 0; a < span; ++a) {
+                const auto& t = texels[size_t(lk.j * span + b) * row + lk.i * span + a];
+                if (t.area > 0 && t.db_max > 0)
+                    region.Add(t.pos, t.nrm, faceted ? t.spread.reach : 0.f,
+                               faceted ? t.spread.tilt : 0.f);
+            }
+        return region;
+    }
+
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. A
     // sample's facets are read only for the pairs where they may not all face the receiver
@@ -802,8 +818,15 @@ private:
         const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const double texel_side = emitter_scale / double(row);
+        // A region of one sample is tested as fast pair by pair (most links at the finest
+        // level).
+        const bool cull = span > 1;
+        const RegionBound region = cull ? PairRegion(em, lk, ls, faceted) : RegionBound{};
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
+            if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
+                         RegionFacesAway(rp.position, region)))
+                continue;  // every pair's horizon or facing test would fail
             const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b) {
                 for (uint32_t a = 0; a < span; ++a) {

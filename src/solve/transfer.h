@@ -10,6 +10,7 @@
 
 #include "core/vec.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <span>
@@ -124,6 +125,59 @@ inline bool BelowHorizon(const PairGeometry& g, const Vec3f& n, const FacetSprea
     const double h = Dot(g.d, Vec3d(n));
     const double d1 = std::abs(g.d.x) + std::abs(g.d.y) + std::abs(g.d.z);
     return h < 0 && -h > spread.reach + 1e-9 * d1;
+}
+
+// A link's emitter region (several samples) as one receiver point sees it, to test once
+// per point instead of once per pair in the gather (CollectPairs): most of a link's
+// candidate pairs on a scan's folds cannot carry light, half of lucy's in links that carry
+// none. A sphere around the samples' centres and their facets' (within spread.reach of
+// the sample's centre) and a cone around their normals (the facets' within spread.tilt of
+// the sample's, as a chord); reach and tilt are 0 where the facets are not read. `centre`
+// and `axis` (unit) are any point and direction near them; Add() grows the bounds to hold a
+// sample, with margins for rounding.
+struct RegionBound {
+    Vec3f centre, axis;
+    double radius = 0, min_cos = 1;  // |p - centre| <= radius, Dot(axis, m) >= min_cos
+    void Add(const Vec3f& pos, const Vec3f& nrm, float reach, float tilt) {
+        radius = std::max(radius, (Length(Vec3d(pos) - Vec3d(centre)) + double(reach)) *
+                                      (1 + 1e-6));
+        min_cos = std::min(min_cos, Dot(Vec3d(axis), Vec3d(nrm)) - double(tilt) * (1 + 1e-6));
+    }
+};
+
+// True when every centre the region holds lies below the tangent plane of x (normal n,
+// unit within 1e-6): each pair's transfer (TexelTransfer, FacetedTransfer, either path)
+// then fails its horizon test, Dot(p - x, n) <= 0 for its part's centre p, so the caller
+// may skip the region's pairs for x. Margins: |n| <= 1 + 1e-6, and the dot products'
+// rounding (~1e-16 of |p - x|_1 <= |c - x|_1 + 2 radius) on both sides.
+inline bool RegionBelowHorizon(const Vec3f& x, const Vec3f& n, const RegionBound& r) {
+    const Vec3d d = Vec3d(r.centre) - Vec3d(x);
+    const double h = Dot(d, Vec3d(n));
+    const double d1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+    return h < 0 && -h > r.radius * (1 + 1e-5) + 1e-9 * (d1 + r.radius);
+}
+
+// True when x lies behind the plane of every part the region holds (Dot(x - p, m) < 0 for
+// each centre p and normal m): each pair's transfer then fails its facing test (the
+// sample's, or in a mixed sample each facet's), so the caller may skip the region for x.
+// With v = x - centre at angle phi from the axis and the normals within theta = acos(min_cos)
+// of it, Dot(v, m) <= |v| cos(phi - theta) once phi >= theta, and Dot(c - p, m) <= radius.
+// cos(phi - theta) grows with cos phi there, so cos phi is taken from above (the axis
+// and normals are unit within 1e-6), |v| |m| from below, and min_cos lowered by 1e-5.
+inline bool RegionFacesAway(const Vec3f& x, const RegionBound& r) {
+    const double k = r.min_cos - 1e-5;
+    if (k <= 0)
+        return false;  // a cone of 90 degrees or more: some normal may face x
+    const Vec3d v = Vec3d(x) - Vec3d(r.centre);
+    const double len = Length(v);
+    if (!(len > 0))
+        return false;
+    const double c = std::max(-1.0, Dot(v, Vec3d(r.axis)) / len + 1e-5);
+    if (c >= 0)
+        return false;  // phi <= 90 degrees
+    const double cos_gap = c * k + std::sqrt(1 - c * c) * std::sqrt(1 - k * k);
+    return cos_gap < 0 &&
+           len * (1 - 1e-5) * -cos_gap > r.radius * (1 + 1e-5) + 1e-9 * (len + r.radius);
 }
 
 }  // namespace mebake::solve

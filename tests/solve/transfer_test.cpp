@@ -231,5 +231,97 @@ TEST(Transfer, BelowHorizonOnlyWhereNoFacetCanPass) {
     EXPECT_GT(deep_below, 0.5 * deep) << deep_below << " of " << deep;
 }
 
+// RegionBelowHorizon and RegionFacesAway let the gather skip a link's whole region for a
+// receiver point: wherever either says so, no pair of the region may carry light, by either
+// path of the gather (FacetedTransfer with the facets, TexelTransfer alone where they agree),
+// also for receivers placed just on a part's plane; and they must find most receivers for
+// which the whole region lies well below the horizon or wholly behind its parts.
+TEST(Transfer, RegionCullsOnlyWhereNoPairCanPass) {
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    auto random_unit = [&](const Vec3f& around, float spread) {
+        return Normalize(around + Vec3f(u(rng), u(rng), u(rng)) * spread);
+    };
+    struct Sample {
+        TexelSource t;
+        TexelSource facets[4];
+        FacetSpread spread;
+    };
+    int culled_below = 0, culled_away = 0, clear = 0, clear_culled = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        // A region of 2 x 2 or 4 x 4 samples of side `side` on a gently curved sheet.
+        const float side = 0.05f;
+        const int span = trial % 2 ? 2 : 4;
+        const Vec3f axis = random_unit({0, 0, 0}, 1.f);
+        const Vec3f tu = Normalize(Cross(axis, Vec3f(0.3f, 0.5f, 0.8f)));
+        const Vec3f tv = Cross(axis, tu);
+        const float bend = trial % 3 == 0 ? 1.f : 0.2f;
+        const Vec3f origin(u(rng), u(rng), u(rng));
+        std::vector<Sample> samples;
+        RegionBound region{origin, axis};
+        for (int b = 0; b < span; ++b)
+            for (int a = 0; a < span; ++a) {
+                Sample smp;
+                const Vec3f pos = origin + tu * (a * side) + tv * (b * side) +
+                                  axis * (bend * side * u(rng));
+                const Vec3f nrm = random_unit(axis, bend * 0.5f);
+                smp.t = {pos, nrm, side * side};
+                for (auto& f : smp.facets)
+                    f = {pos + Vec3f(u(rng), u(rng), u(rng)) * (side / 2),
+                         random_unit(nrm, bend * 0.5f), u(rng) < -0.9f ? 0.f : side * side / 4};
+                smp.spread = SpreadOf(smp.t, smp.facets);
+                region.Add(pos, nrm, smp.spread.reach, smp.spread.tilt);
+                samples.push_back(smp);
+            }
+        for (int k = 0; k < 20; ++k) {
+            const Sample& s0 = samples[size_t(k) % samples.size()];
+            Vec3f x = origin + Vec3f(u(rng), u(rng), u(rng)) * (k % 2 ? 0.3f : 2.f);
+            Vec3f n = random_unit({0, 0, 0}, 1.f);
+            if (k % 5 == 0)  // x just on a facet's plane, or a facet's centre on x's horizon
+                x = s0.facets[0].pos + Cross(s0.facets[0].nrm, Vec3f(0, 1, 0)) * 0.5f;
+            if (k % 5 == 1)
+                n = Normalize(Cross(s0.facets[1].pos - x, Vec3f(0, 0, 1)));
+            // The highest part above x's plane, and the part x sees most from the front.
+            double highest = -1e30, front = -1e30;
+            for (const Sample& smp : samples) {
+                highest = std::max(highest, Dot(Vec3d(smp.t.pos) - Vec3d(x), Vec3d(n)));
+                front = std::max(front, Dot(Vec3d(x) - Vec3d(smp.t.pos), Vec3d(smp.t.nrm)));
+                for (const auto& f : smp.facets)
+                    if (f.area > 0) {
+                        highest = std::max(highest, Dot(Vec3d(f.pos) - Vec3d(x), Vec3d(n)));
+                        front = std::max(front, Dot(Vec3d(x) - Vec3d(f.pos), Vec3d(f.nrm)));
+                    }
+            }
+            const bool below = RegionBelowHorizon(x, n, region);
+            const bool away = RegionFacesAway(x, region);
+            const bool is_clear = highest < -0.5 * side || front < -0.5 * side;
+            clear += is_clear ? 1 : 0;
+            if (!below && !away)
+                continue;
+            culled_below += below ? 1 : 0;
+            culled_away += away ? 1 : 0;
+            clear_culled += is_clear ? 1 : 0;
+            if (below) {
+                ASSERT_LE(highest, 0) << "trial " << trial;
+            }
+            if (away) {
+                ASSERT_LE(front, 0) << "trial " << trial;
+            }
+            for (const Sample& smp : samples) {
+                Vec3d e;
+                int carrier = 7;
+                ASSERT_FALSE(FacetedTransfer(x, n, smp.t, smp.facets, side, &e, &carrier))
+                    << "trial " << trial;
+                ASSERT_FALSE(TexelTransfer(x, n, smp.t, side, &e)) << "trial " << trial;
+            }
+        }
+    }
+    EXPECT_GT(culled_below, 5000);
+    EXPECT_GT(culled_away, 5000);
+    // Most receivers that see the whole region half a sample below their horizon or behind
+    // all of its parts are found.
+    EXPECT_GT(clear_culled, 0.5 * clear) << clear_culled << " of " << clear;
+}
+
 }  // namespace
 }  // namespace mebake::solve
