@@ -39,6 +39,24 @@ float ReliefOf(const Vec3f& base, const Vec3f& n, const Vec3f& pos, const Vec3f&
     return std::abs(Dot(pos - base, n)) + radius * std::sqrt(1.f - c * c) + relief;
 }
 
+// The mean of a chart's unshot field (or its value) over texel (i, j) of an n x n grid,
+// from 2 x 2 Gauss points (exact up to cubics): quadtree leaves finer than the texel would
+// otherwise give the value of the one leaf whose corner is the texel centre.
+void TexelMean(const ChartField& field, bool unshot, uint32_t i, uint32_t j, uint32_t n,
+               float* val) {
+    std::fill(val, val + 9, 0.f);
+    for (int q = 0; q < 4; ++q) {
+        double gs, gt, w;
+        GaussPoint2D(2, q, &gs, &gt, &w);
+        float part[9];
+        if (unshot)
+            field.EvalUnshot((i + gs) / n, (j + gt) / n, part);
+        else
+            field.EvalValue((i + gs) / n, (j + gt) / n, part);
+        for (int k = 0; k < field.blocks(); ++k)
+            val[k] += float(w) * part[k];
+    }
+}
 }  // namespace
 
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
@@ -167,18 +185,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
             t.hull_radius = g.radius;
             if (g.area <= 0)
                 continue;
-            // The texel's mean unshot E (2 x 2 Gauss points, exact up to cubics): quadtree
-            // leaves finer than the texel would otherwise give the value of the one leaf
-            // whose corner is the texel centre.
-            std::fill(val, val + 9, 0.f);
-            for (int q = 0; q < 4; ++q) {
-                double gs, gt, w;
-                GaussPoint2D(2, q, &gs, &gt, &w);
-                float part[9];
-                field.EvalUnshot((i + gs) / n, (j + gt) / n, part);
-                for (int k = 0; k < field.blocks(); ++k)
-                    val[k] += float(w) * part[k];
-            }
+            TexelMean(field, true, i, j, n, val);
             const Material& m = scene_.MaterialOf(g.material);
             Vec3f rho = Albedo(g.material, g.color);
             for (int c = 0; c < 3; ++c) {
@@ -321,15 +328,8 @@ double Solver::ReflectedPower(uint32_t chart) const {
             const auto& g = sc.geometry.At(top, i, j);
             if (g.area <= 0)
                 continue;
-            float val[9] = {};
-            for (int q = 0; q < 4; ++q) {
-                double gs, gt, w;
-                GaussPoint2D(2, q, &gs, &gt, &w);
-                float part[9];
-                field.EvalValue((i + gs) / n, (j + gt) / n, part);
-                for (int k = 0; k < field.blocks(); ++k)
-                    val[k] += float(w) * part[k];
-            }
+            float val[9];
+            TexelMean(field, false, i, j, n, val);
             const Vec3f rho = Albedo(g.material, g.color);
             Vec3f b;
             for (int c = 0; c < 3; ++c)
