@@ -152,6 +152,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->tolerance = s.value("tolerance", o->tolerance);
     o->max_bounces = s.value("max_bounces", o->max_bounces);
     o->stop_fraction = s.value("stop_fraction", o->stop_fraction);
+    o->chart_stop_fraction = s.value("chart_stop_fraction", o->chart_stop_fraction);
     o->sky_directions = s.value("sky_directions", o->sky_directions);
     o->light_samples = s.value("light_samples", o->light_samples);
     o->cluster_links = s.value("cluster_links", o->cluster_links);
@@ -162,6 +163,8 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
         InputError({scene_file}, "solver.sky_extra_levels must be 0..8");
     if (!(o->sky_fit_floor >= 0))
         InputError({scene_file}, "solver.sky_fit_floor must be >= 0");
+    if (!(o->chart_stop_fraction >= 0 && o->chart_stop_fraction < 1))
+        InputError({scene_file}, "solver.chart_stop_fraction must lie in [0, 1)");
     if (o->order < 0 || o->order > 3) InputError({scene_file}, "solver.order must be 0..3");
     const std::string multi =
         s.value("multi_emitter", std::string(o->multi_emitter_simplify ? "simplify" : "full"));

@@ -47,6 +47,9 @@ struct SolverSettings {
     double tolerance = 0.02;      // relative error that triggers subdivision
     int max_bounces = 16;         // batches of shooting after the direct pass
     double stop_fraction = 1e-3;  // stop when unshot power < this x emitted power
+    // ... and no chart's unshot power is this x its own reflected power (0: off, the
+    // default: 0.01 converges narrow folds for +10 % of the horse's solve CPU)
+    double chart_stop_fraction = 0;
     double time_limit = 0;        // seconds; 0 = none
     int sky_directions = 128;     // visibility directions per receiver point for the sky
     int light_samples = 64;       // visibility samples per receiver point in penumbrae

@@ -1,6 +1,8 @@
 // One Southwell batch as a task graph (task_graph.h). Shooters are the charts with power
 // within batch_fraction of the largest, in chart order (the first batch shoots every
-// chart, so emission, added only to first shots, goes out once). They are built and
+// chart, so emission, added only to first shots, goes out once), and the lagging charts
+// (Solver::LaggingCharts) whatever their power; once the scan's unshot power is below
+// stop_fraction, the lagging charts alone. They are built and
 // gathered a group of `emitter_group` at a time: all at once, emitters took ~80 KB per
 // chart, memory that grew with the chart count rather than the lighting. Light that one
 // group delivers may be shot by a later group of the same batch (Southwell shooting allows
@@ -39,11 +41,12 @@
 
 namespace mebake::solve {
 
-size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first) {
+size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first,
+                          const std::vector<uint8_t>& lagging) {
     const uint32_t nc = uint32_t(charts_.size());
     std::vector<uint32_t> shooters;
     for (uint32_t c = 0; c < nc; ++c)
-        if (power[c] > 0 && (first || power[c] >= opt_.batch_fraction * largest))
+        if (power[c] > 0 && (first || lagging[c] || power[c] >= opt_.batch_fraction * largest))
             shooters.push_back(c);
     const size_t group = std::max<size_t>(1, opt_.emitter_group);
     const size_t groups = (shooters.size() + group - 1) / group;

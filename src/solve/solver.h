@@ -206,7 +206,8 @@ private:
     double ReceiverTau() const;
     double LinkToleranceScale() const;  // link_refine.h: the allowance per unit irradiance
     double ReferenceIrradiance() const;
-    size_t ShootBatch(const std::vector<double>& power, double largest, bool first);
+    size_t ShootBatch(const std::vector<double>& power, double largest, bool first,
+                      const std::vector<uint8_t>& lagging);
     void CountNodes();
     void StoreField(uint32_t chart);  // into pool_, when there is one
     void RefineDirect(uint32_t chart);
@@ -222,6 +223,9 @@ private:
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
                 const std::vector<std::vector<float>>& links);
     double UnshotPower(uint32_t chart, bool first_shot) const;
+    double ReflectedPower(uint32_t chart) const;
+    // Charts with unshot power of at least chart_stop_fraction x their reflected power.
+    std::vector<uint8_t> LaggingCharts(const std::vector<double>& unshot) const;
     float RayOffset(uint32_t chart) const;
     static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
     // A quadtree node's bounding sphere, from the chart's geometry pyramid (the links' and
