@@ -57,6 +57,21 @@ void TexelMean(const ChartField& field, bool unshot, uint32_t i, uint32_t j, uin
             val[k] += float(w) * part[k];
     }
 }
+
+// The radiosity a texel reflects from its field's value `val` (TexelMean): the radiosity
+// itself in radiosity mode, else rho (n . E)+ per colour.
+Vec3f TexelRadiosity(const float* val, const Vec3f& n, const Vec3f& rho, bool radiosity) {
+    Vec3f b;
+    for (int c = 0; c < 3; ++c) {
+        if (radiosity) {
+            b[c] = std::max(0.f, val[c]);
+        } else {
+            const float irr = n.x * val[3 * c] + n.y * val[3 * c + 1] + n.z * val[3 * c + 2];
+            b[c] = rho[c] * std::max(0.f, irr);
+        }
+    }
+    return b;
+}
 }  // namespace
 
 Solver::Solver(const Scene& scene, const std::vector<SolveChart>& charts,
@@ -187,21 +202,12 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 continue;
             TexelMean(field, true, i, j, n, val);
             const Material& m = scene_.MaterialOf(g.material);
-            Vec3f rho = Albedo(g.material, g.color);
-            for (int c = 0; c < 3; ++c) {
-                float b;
-                if (opt_.settings.radiosity) {
-                    b = std::max(0.f, val[c]);
-                } else {
-                    float irr = g.normal.x * val[3 * c] + g.normal.y * val[3 * c + 1] +
-                                g.normal.z * val[3 * c + 2];
-                    b = rho[c] * std::max(0.f, irr);
-                }
-                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-                if (first_shot && emissive_[chart])
-                    b += float(std::numbers::pi) * m.emission[c];
-                t.db[c] = b;
-            }
+            t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
+                                  opt_.settings.radiosity);
+            // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+            if (first_shot && emissive_[chart])
+                for (int c = 0; c < 3; ++c)
+                    t.db[c] += float(std::numbers::pi) * m.emission[c];
             t.db_max = Luminance(t.db);
         }
     }
@@ -330,14 +336,8 @@ double Solver::ReflectedPower(uint32_t chart) const {
                 continue;
             float val[9];
             TexelMean(field, false, i, j, n, val);
-            const Vec3f rho = Albedo(g.material, g.color);
-            Vec3f b;
-            for (int c = 0; c < 3; ++c)
-                b[c] = opt_.settings.radiosity
-                           ? std::max(0.f, val[c])
-                           : rho[c] * std::max(0.f, g.normal.x * val[3 * c] +
-                                                        g.normal.y * val[3 * c + 1] +
-                                                        g.normal.z * val[3 * c + 2]);
+            const Vec3f b = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
+                                           opt_.settings.radiosity);
             p += double(Luminance(b)) * g.area;
         }
     }
@@ -718,10 +718,10 @@ private:
         return &node_values_[size_t(node_slot_[n]) * values_per_node_];
     }
 
-    // Node n's Gauss points and albedo into pts_ and albedo_. The refinement comes back to
-    // a node for every emitter and between its regions' subtrees, so the points of the
-    // last kPointSlots nodes seen are kept (slot n mod kPointSlots: the same values
-    // whatever was evicted, so the same result).
+    // Node n's Gauss points, albedo and link-ray bounds into pts_, albedo_ and bounds_. The
+    // refinement comes back to a node for every emitter and between its regions' subtrees,
+    // so those of the last kPointSlots nodes seen are kept (slot n mod kPointSlots: the same
+    // values whatever was evicted, so the same result).
     void NodePoints(size_t n) {
         if (n == pts_node_)
             return;
@@ -730,14 +730,18 @@ private:
             point_slot_node_.assign(kPointSlots, SIZE_MAX);
             point_cache_.resize(kPointSlots * per);
             albedo_cache_.resize(kPointSlots * per);
+            bounds_cache_.resize(kPointSlots * per);
         }
         if (point_slot_node_[slot] == n) {
             pts_.assign(&point_cache_[slot * per], &point_cache_[slot * per] + per);
             albedo_.assign(&albedo_cache_[slot * per], &albedo_cache_[slot * per] + per);
+            bounds_.assign(&bounds_cache_[slot * per], &bounds_cache_[slot * per] + per);
         } else {
             s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
+            ReceiverBounds(n);
             std::copy(pts_.begin(), pts_.end(), &point_cache_[slot * per]);
             std::copy(albedo_.begin(), albedo_.end(), &albedo_cache_[slot * per]);
+            std::copy(bounds_.begin(), bounds_.end(), &bounds_cache_[slot * per]);
             point_slot_node_[slot] = n;
         }
         pts_node_ = n;
@@ -764,7 +768,6 @@ private:
         while (ls < top && size_t(ng_ * ng_) << (2 * (ls - lk.level)) < 2 * want)
             ++ls;
         NodePoints(lk.node);
-        ReceiverBounds(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         split_.Clear();
@@ -803,25 +806,11 @@ private:
         return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
-    // The own samples of the node's receiver points (pts_) for their link rays
-    // (SegmentBatch::AddSegmentBetween): the geometry texel each Gauss point is sampled from
-    // (GaussPoints' level) and its children's relief about the point's plane, the finest
-    // geometry texels taken as flat (as an emitter sample's, Texel::relief).
-    // Kept per node in slots as NodePoints' points are (2.4 % of the horse's solve when
-    // recomputed at every change of node).
+    // The own samples of node's receiver points (pts_, NodePoints) for their link rays
+    // (SegmentBatch::AddSegmentBetween), into bounds_: the geometry texel each Gauss point is
+    // sampled from (GaussPoints' level) and its children's relief about the point's plane,
+    // the finest geometry texels taken as flat (as an emitter sample's, Texel::relief).
     void ReceiverBounds(size_t node) {
-        if (node == bounds_node_)
-            return;
-        bounds_node_ = node;
-        const size_t per = size_t(ng_ * ng_), slot = node % kPointSlots;
-        if (bounds_slot_node_.empty()) {
-            bounds_slot_node_.assign(kPointSlots, SIZE_MAX);
-            bounds_cache_.resize(kPointSlots * per);
-        }
-        if (bounds_slot_node_[slot] == node) {
-            bounds_.assign(&bounds_cache_[slot * per], &bounds_cache_[slot * per] + per);
-            return;
-        }
         const QuadNode& nd = field_.node(node);
         const int gl = std::min(finest_, int(nd.level) + 2);
         const uint32_t res = 1u << gl;
@@ -841,8 +830,6 @@ private:
             }
             bounds_.push_back(b);
         }
-        std::copy(bounds_.begin(), bounds_.end(), &bounds_cache_[slot * per]);
-        bounds_slot_node_[slot] = node;
     }
 
     // The bounds of the parts CollectPairs may test for link lk at level ls (transfer.h):
@@ -868,8 +855,6 @@ private:
     // point the same way (FacetsAgree); the others take TexelTransfer's answer, which
     // FacetedTransfer would give them.
     void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
-        if (rays)
-            ReceiverBounds(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const int top = int(em.levels.size()) - 1;
         const bool faceted = ls < top || !em.facets.empty();
@@ -938,15 +923,13 @@ private:
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
     std::vector<ReceiverPoint> pts_;
-    std::vector<SampleBound> bounds_;  // ReceiverBounds(): of pts_, for node bounds_node_
-    size_t bounds_node_ = SIZE_MAX;
-    std::vector<size_t> bounds_slot_node_;  // ReceiverBounds' slots, as point_slot_node_
-    std::vector<SampleBound> bounds_cache_;
+    std::vector<SampleBound> bounds_;  // ReceiverBounds(): of pts_
     std::vector<Vec3f> albedo_;
-    static constexpr size_t kPointSlots = 1024;  // x 9 points x 60 B at M2: 0.55 MB
+    static constexpr size_t kPointSlots = 1024;  // x 9 points x 104 B at M2: 0.96 MB
     std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX
     std::vector<ReceiverPoint> point_cache_;
     std::vector<Vec3f> albedo_cache_;
+    std::vector<SampleBound> bounds_cache_;
     std::vector<ReceiverPoint> set_pts_;  // the deferred links' receiver points, ng^2 a node
     std::vector<Vec3f> set_albedo_;
     std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
