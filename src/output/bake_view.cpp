@@ -144,12 +144,17 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     if (!normal_.empty())
         n += (shared - n) * seams_->Fade(uv.x, uv.y);
     n = Normalize(n);
-    if (!(Dot(n, n) > 0)) {
-        const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);
-        n = Normalize(Cross(p1 - p0, p2 - p0));
-        if (!(Dot(n, n) > 0))
-            n = Vec3d(0, 0, 1);
-    }
+    // A shading normal on the wrong side of its triangle (vertex normals averaged over a
+    // fold that turns back on itself), or none, falls back to the triangle's plane, as the
+    // reference path tracer has it (reference.cpp, SurfaceAt): with the reversed normal
+    // (n . E)+ is 0 and the pixel showed black (lucy's away picture, bench/RESULTS.md
+    // "Issue 14 (session 15)").
+    const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);
+    const Vec3d face = Normalize(Cross(p1 - p0, p2 - p0));
+    if (!(Dot(n, face) > 0) && Dot(face, face) > 0)
+        n = face;
+    if (!(Dot(n, n) > 0))
+        n = Vec3d(0, 0, 1);
     p.uv = uv;
     p.normal = Vec3f(n);
     p.material = &scene_.MaterialOf(tile_.material[t]);

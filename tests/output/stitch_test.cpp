@@ -38,6 +38,7 @@ struct GridOptions {
     float bx = 0.6f, by = 0.3f;  // gradient of E_z
     std::vector<float> offset;   // per chart, added to its fitted E_z (all colours)
     float tilt = 0;              // odd charts' vertex normals (tilt, 0, 1): per-chart normals
+    bool reversed = false;       // odd charts' vertex normals (0, 0, -1): behind their faces
 };
 
 float Span(const GridOptions& o) {
@@ -85,7 +86,9 @@ void WriteGridBake(const std::string& dir, const GridOptions& o) {
                     const int gc = cx * o.m + q, gr = cy * o.m + r;
                     const Vec3f p = lattice(gc, gr);
                     t.position.push_back(p);
-                    t.normal.push_back(Normalize(Vec3f(c % 2 ? o.tilt : 0.f, 0, 1)));
+                    t.normal.push_back(o.reversed && c % 2
+                                           ? Vec3f(0, 0, -1)
+                                           : Normalize(Vec3f(c % 2 ? o.tilt : 0.f, 0, 1)));
                     t.uv.push_back(Vec2f(o.inset + span * (p.x - float(cx)),
                                          o.inset + span * (p.y - float(cy))));
                     t.vertex_id.push_back(uint64_t(gr) * uint64_t(cols) + uint64_t(gc));
@@ -401,6 +404,29 @@ TEST_F(StitchTest, OwnNormalsBeyondTheBand) {
     const BakeView view = OpenBakeView(dir_);
     ExpectSame(BInEveryChart(o, view, {0.3, 0.5, 0.7}, {0.3, 0.5, 0.7}),
                BInEveryChart(o, raw, {0.3, 0.5, 0.7}, {0.3, 0.5, 0.7}));
+}
+
+// A vertex normal behind its triangle (averaged over a fold that turns back on itself)
+// shades with the triangle's plane, as the reference path tracer does; with the reversed
+// normal (n . E)+ was 0 and lucy's away picture showed a black pixel there.
+TEST_F(StitchTest, ReversedShadingNormalsFallBackToTheFace) {
+    GridOptions o;
+    o.reversed = true;
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    LoadShaders(view);
+    for (int cy = 0; cy < o.ky; ++cy)
+        for (int cx = 0; cx < o.kx; ++cx)
+            for (const double f : {0.04, 0.5, 0.93}) {
+                const double x = cx + f, y = cy + 1 - f;
+                const ChartPoint p = Locate(o, cx, cy, x, y);
+                const ShadingPoint sp = shaders_[p.chart]->AtUv(p.uv);
+                EXPECT_GT(sp.normal.z, 0.999f) << "chart " << p.chart;
+                const Vec3f b = shaders_[p.chart]->Radiosity(sp);
+                for (int k = 0; k < 3; ++k)
+                    EXPECT_NEAR(b[k], ExactB(o, x, y, k), 1e-4 * ExactB(o, x, y, k))
+                        << "chart " << p.chart << " at (" << x << ", " << y << ")";
+            }
 }
 
 TEST_F(StitchTest, StitchingStaysWithinThePerturbation) {
