@@ -65,6 +65,11 @@ public:
     // meshes, which made the export's peak grow with the mesh (bench/RESULTS.md, issue 16
     // session 10).
     uint64_t StitchCache() const;
+    // Export: the light map's texel stitch (output/texel_stitch.h): its seam samples (64 B
+    // each) in memory while they fit, and the colour channels' CGs in parallel when their
+    // vectors fit too; past it the samples are read from a temporary file by every CG pass
+    // and the channels are solved in turn (the same texels either way).
+    uint64_t StitchRows() const;
 
     std::vector<MemoryShare> Shares() const;
 

@@ -184,6 +184,7 @@ void RunExportJob(const ExportJobOptions& c) {
             continue;
         const auto t = Clock::now();
         MapWriteOptions mo = c.maps;
+        mo.stitch_memory = MemoryBudget(c.memory).StitchRows();
         if (m.content == MapContent::Radiosity)
             mo.png_path = png;
         auto files = WriteMapPages(view, atlas, m.path, m.content, mo);

@@ -245,7 +245,7 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
     const uint32_t pages = uint32_t(atlas.pages.size());
     if (path == "-" && pages > 1)
         UsageError("the atlas has {} pages; give a file name instead of '-'", pages);
-    const auto stitch = StitchForView(view, atlas, content);
+    const auto stitch = StitchForView(view, atlas, content, options.stitch_memory);
     std::vector<std::string> written;
     for (uint32_t p = 0; p < pages; ++p) {
         const std::string file = PagePath(path, p, pages);
@@ -277,11 +277,16 @@ std::vector<std::string> WriteMapPages(const BakeView& view, const Atlas& atlas,
             std::vector<uint8_t> bytes;
             ComputePage(view, atlas, p, content,
                         [&](std::span<const float> pixels, uint32_t, uint32_t rows) {
-                            w.WriteRows(pixels, int(rows));
-                            if (png_w) {  // the bytes WritePngPage writes
-                                ToneMapBand(pixels, options.tone, bytes);
-                                png_w->WriteRows(bytes, int(rows));
-                            }
+                            // Two encoders of the same rows, each single-threaded (ZIP,
+                            // deflate): side by side, each streaming its rows in order.
+                            TaskGroup encoders;
+                            if (png_w)
+                                encoders.Run([&] {  // the bytes WritePngPage writes
+                                    ToneMapBand(pixels, options.tone, bytes);
+                                    png_w->WriteRows(bytes, int(rows));
+                                });
+                            encoders.Run([&] { w.WriteRows(pixels, int(rows)); });
+                            encoders.Wait();
                         },
                         64, 0, stitch.get());
             w.Commit();
@@ -307,15 +312,17 @@ std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas,
 }
 
 std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& atlas,
-                                           MapContent content) {
+                                           MapContent content, uint64_t memory_bytes) {
     if (!view.stitched())
         return nullptr;
     TexelStitchStats s;
-    auto stitch = std::make_unique<TexelStitch>(StitchTexels(view, atlas, content, &s));
+    auto stitch = std::make_unique<TexelStitch>(StitchTexels(view, atlas, content, &s, memory_bytes));
     spdlog::info("{} seams: {} texels, {} samples, bilinear mismatch rms {:.4g} -> {:.4g} ({} "
                  "iterations)",
                  content == MapContent::Radiosity ? "light map" : "E map", s.texels, s.samples,
                  s.rms_before, s.rms_after, s.iterations);
+    spdlog::debug("texel stitch: samples {}, channels {}", s.rows_in_memory ? "in memory" : "on disk",
+                  s.channels_in_parallel ? "in parallel" : "in turn");
     return stitch;
 }
 

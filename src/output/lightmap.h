@@ -78,6 +78,9 @@ struct MapWriteOptions {
     // A Radiosity .exr map also written as PNG to this path (PagePath per page) from the
     // same shaded texels: one shading and one stitch for both (the bake's light map).
     std::string png_path;
+    // The texel stitch's share (MemoryBudget::StitchRows: samples in memory, channels in
+    // parallel); it changes the time, not the texels.
+    uint64_t stitch_memory = MemoryBudget(uint64_t(1) << 30).StitchRows();
 };
 
 // Writes every page to PagePath(path, ...), as OpenEXR (".exr") or, for Radiosity, 8-bit
@@ -94,7 +97,8 @@ std::vector<uint8_t> EncodeLightMapPng(const BakeView& view, const Atlas& atlas,
                                        const ToneMap& tone, const TexelStitch* stitch = nullptr);
 
 // The texel stitch of `content` for this view, or nullptr when the view is not stitched.
-std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& atlas,
-                                           MapContent content);
+std::unique_ptr<TexelStitch> StitchForView(
+    const BakeView& view, const Atlas& atlas, MapContent content,
+    uint64_t memory_bytes = MemoryBudget(uint64_t(1) << 30).StitchRows());
 
 }  // namespace mebake::output

@@ -3,11 +3,13 @@
 #include "core/check.h"
 #include "core/memory_budget.h"
 #include "core/paged_file.h"
+#include "core/parallel.h"
 #include "output/seam_graph.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <unordered_map>
 
@@ -104,9 +106,13 @@ ChartPart PrepareChart(const BakeView& view, const Atlas& atlas, uint32_t c,
 
 // Rows of A: 8 (unknown, weight) entries per seam sample, side y's weights negated; the
 // weights are kept as the two footprints' (ax, ay) (64 bytes a row, not 96) and made again
-// when used, the same doubles. The rows live in a temporary file behind a small page cache
-// (core/paged_file.h) and every pass reads them in order a block at a time: they are the
-// stitch's largest part (46 MB at 50M triangles), and a small export never writes the file.
+// when used, the same doubles. Every CG pass reads them all in order. They stay in memory,
+// in blocks, up to a byte cap (the export's `export.stitch_rows` share); past it they all
+// move to a temporary file behind a small page cache (core/paged_file.h) that each pass
+// reads a block at a time: they are the stitch's largest part (46 MB at 50M triangles).
+// In memory the passes over them were a third of the horse's export CPU: a 4 MiB cache
+// that a 6.6 MB file cycles through misses every page, and every pass copied the rows in
+// through the kernel (bench/RESULTS.md, "Issue 13 (session 15)").
 struct SeamRow {
     uint32_t index[8];
     double frac[4];  // x's ax, ay, y's ax, ay
@@ -119,22 +125,41 @@ struct SeamRow {
 
 class SeamRows {
 public:
-    SeamRows() : file_(PagedFile::Temporary{{}, "texel stitch rows"}, kRowCacheBytes) {}
-    uint64_t rows() const { return file_.size(); }
+    explicit SeamRows(size_t memory_bytes) : memory_rows_(memory_bytes / sizeof(SeamRow)) {}
+    uint64_t rows() const { return file_ ? file_->size() : count_; }
+    bool in_memory() const { return !file_; }
+    uint64_t memory_bytes() const { return uint64_t(blocks_.size()) * kBlockRows * sizeof(SeamRow); }
     void Add(const std::array<uint32_t, 8>& idx, const Footprint& fx, const Footprint& fy) {
         SeamRow r;
         std::copy(idx.begin(), idx.end(), r.index);
         r.frac[0] = fx.ax, r.frac[1] = fx.ay, r.frac[2] = fy.ax, r.frac[3] = fy.ay;
-        file_.Push(r);
+        if (!file_ && count_ >= memory_rows_)
+            MoveToFile();
+        if (file_) {
+            file_->Push(r);
+            return;
+        }
+        if (count_ % kBlockRows == 0) {
+            blocks_.emplace_back();
+            blocks_.back().reserve(kBlockRows);
+        }
+        blocks_.back().push_back(r);
+        ++count_;
     }
-    // f(row) for every row in order.
+    // f(row) for every row in order. Concurrent calls are safe while the rows are in memory.
     template <typename F>
     void ForEach(F&& f) {
+        if (!file_) {
+            for (const auto& block : blocks_)
+                for (const SeamRow& row : block)
+                    f(row);
+            return;
+        }
         const uint64_t n = rows();
         block_.resize(size_t(std::min<uint64_t>(n, kBlockRows)));
         for (uint64_t first = 0; first < n; first += kBlockRows) {
             const size_t count = size_t(std::min<uint64_t>(kBlockRows, n - first));
-            file_.file().Read(first * sizeof(SeamRow), block_.data(), count * sizeof(SeamRow));
+            file_->file().Read(first * sizeof(SeamRow), block_.data(), count * sizeof(SeamRow));
             for (size_t k = 0; k < count; ++k)
                 f(block_[k]);
         }
@@ -143,8 +168,20 @@ public:
 private:
     static constexpr size_t kRowCacheBytes = size_t(4) << 20;
     static constexpr uint64_t kBlockRows = 4096;  // 256 KiB
-    DiskArray<SeamRow> file_;
-    std::vector<SeamRow> block_;
+
+    void MoveToFile() {
+        file_ = std::make_unique<DiskArray<SeamRow>>(
+            PagedFile::Temporary{{}, "texel stitch rows"}, kRowCacheBytes);
+        for (const auto& block : blocks_)
+            file_->PushMany(block.data(), block.size());
+        blocks_ = {};
+    }
+
+    uint64_t memory_rows_;
+    uint64_t count_ = 0;  // rows in memory
+    std::vector<std::vector<SeamRow>> blocks_;  // kBlockRows each, the last one filling
+    std::unique_ptr<DiskArray<SeamRow>> file_;  // set once the rows outgrow memory_rows_
+    std::vector<SeamRow> block_;  // the file's rows being read
 };
 
 // y = (I + lambda A^T A) x.
@@ -215,6 +252,26 @@ double MismatchSquares(SeamRows& a, const std::vector<double>& x) {
     return sum;
 }
 
+// One channel's CG and the bilinear mismatch before and after it.
+struct ChannelSolve {
+    double before = 0, after = 0;
+    int iterations = 0;
+};
+
+ChannelSolve SolveAndMeasure(SeamRows& a, const std::vector<double>& diag,
+                             std::vector<double>& x) {
+    ChannelSolve r;
+    r.before = MismatchSquares(a, x);
+    r.iterations = SolveChannel(a, diag, x);
+    r.after = MismatchSquares(a, x);
+    return r;
+}
+
+// A solved texel as the map stores it: B >= 0; E is signed.
+float StoredValue(MapContent content, double x) {
+    return content == MapContent::Radiosity ? std::max(0.f, float(x)) : float(x);
+}
+
 }  // namespace
 
 const float* StitchedTexels::Find(uint32_t t, int channels) const {
@@ -248,7 +305,7 @@ StitchedTexels TexelStitch::Chart(uint32_t c) const {
 }
 
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
-                         TexelStitchStats* stats) {
+                         TexelStitchStats* stats, uint64_t memory_bytes) {
     TexelStitch st;
     st.channels_ = MapChannels(content);
     const size_t nc = size_t(st.channels_);
@@ -256,7 +313,7 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     const size_t solved = content == MapContent::Radiosity ? 3 : nc;
     const std::vector<uint32_t> last = LastNeighbours(view);
     BorderPairing<EdgeSide> pairing(last);
-    SeamRows rows;
+    SeamRows rows(memory_bytes);
     st.first_.assign(1, 0);
     // The texel lists of the charts a later chart can still pair with (the rest are only
     // in the file).
@@ -346,16 +403,41 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     TexelStitchStats s;
     s.texels = n;
     s.samples = rows.rows();
-    double before = 0, after = 0;
-    std::vector<double> x(n);
-    for (size_t ch = 0; ch < solved && rows.rows() > 0; ++ch) {
-        for_each_slot(false, [&](size_t i, const float* v) { x[i] = v[ch]; });
-        before += MismatchSquares(rows, x);
-        s.iterations = std::max(s.iterations, SolveChannel(rows, diag, x));
-        after += MismatchSquares(rows, x);
-        for_each_slot(true, [&](size_t i, float* v) {  // B >= 0; E is signed
-            v[ch] = content == MapContent::Radiosity ? std::max(0.f, float(x[i])) : float(x[i]);
+    // The channels' CGs share nothing but the rows and the diagonal: with the rows in
+    // memory and room in memory_bytes for every channel's four CG vectors, they run in
+    // parallel (each writes its own vectors: the same doubles as one after the other);
+    // else one after the other with one set of vectors.
+    const uint64_t cg_bytes = uint64_t(solved) * 4 * sizeof(double) * n;
+    const bool parallel = rows.in_memory() && rows.memory_bytes() + cg_bytes <= memory_bytes;
+    s.rows_in_memory = rows.in_memory();
+    s.channels_in_parallel = parallel && rows.rows() > 0;
+    std::vector<ChannelSolve> solves(solved);
+    if (rows.rows() > 0 && parallel) {
+        std::vector<std::vector<double>> xs(solved, std::vector<double>(n));
+        for_each_slot(false, [&](size_t i, const float* v) {
+            for (size_t ch = 0; ch < solved; ++ch)
+                xs[ch][i] = v[ch];
         });
+        ParallelFor(0, int64_t(solved), [&](int64_t ch) {
+            solves[size_t(ch)] = SolveAndMeasure(rows, diag, xs[size_t(ch)]);
+        });
+        for_each_slot(true, [&](size_t i, float* v) {
+            for (size_t ch = 0; ch < solved; ++ch)
+                v[ch] = StoredValue(content, xs[ch][i]);
+        });
+    } else if (rows.rows() > 0) {
+        std::vector<double> x(n);
+        for (size_t ch = 0; ch < solved; ++ch) {
+            for_each_slot(false, [&](size_t i, const float* v) { x[i] = v[ch]; });
+            solves[ch] = SolveAndMeasure(rows, diag, x);
+            for_each_slot(true, [&](size_t i, float* v) { v[ch] = StoredValue(content, x[i]); });
+        }
+    }
+    double before = 0, after = 0;
+    for (const ChannelSolve& c : solves) {  // in channel order, as the passes were made
+        before += c.before;
+        after += c.after;
+        s.iterations = std::max(s.iterations, c.iterations);
     }
     const double count = double(std::max<size_t>(1, rows.rows() * solved));
     s.rms_before = std::sqrt(before / count);

@@ -16,16 +16,19 @@
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
 // memory grows with the seams' texels, not with the map: 5 doubles of CG per texel while
-// the CG runs. The rest is on disk: the samples, 64 bytes each, in a temporary file read in
-// order a block at a time behind a 4 MiB page cache; the texels' indices and values in two
-// more (256 KiB cached each), written as each chart is prepared, read and written in slot
+// the CG runs (13 when the three colour channels are solved in parallel, below). The
+// samples, 64 bytes each, stay in memory up to the `export.stitch_rows` share (every CG
+// pass reads them all); past it they go to a temporary file read in order a block at a
+// time behind a 4 MiB page cache. The texels' indices and values are in two more files
+// (256 KiB cached each), written as each chart is prepared, read and written in slot
 // order by the CG and read back a chart at a time with its tile by the light map
 // (TexelStitch::Chart): a chart's texel list stays in memory only while a later chart can
 // pair with it, as its sides wait for their pair (seam_graph.h's BorderPairing), so no
 // per-texel array of the whole map outlives the CG (it was 17 MB at 100M triangles, 858K
 // seam texels). The global CG is kept (one system, not one per seam component) so the
-// texels are the same bytes as before. Single-threaded and
-// in chart order: the same texels for any thread count. Folds (faces more than 45 degrees
+// texels are the same bytes as before. Each channel's CG is single-threaded and in chart
+// order; the channels run in parallel when the samples and their vectors fit the share
+// (they share nothing else): the same texels for any thread count. Folds (faces more than 45 degrees
 // apart) and mesh borders are left alone, as seam_graph.h does.
 #pragma once
 
@@ -45,6 +48,8 @@ struct TexelStitchStats {
     int iterations = 0;     // most CG iterations over the channels
     double rms_before = 0;  // bilinear mismatch over all samples and channels
     double rms_after = 0;
+    bool rows_in_memory = true;         // else in a temporary file
+    bool channels_in_parallel = false;  // else solved in turn
 };
 
 // One chart's stitched texels, read back from the stitch's file for the chart being shaded.
@@ -65,7 +70,8 @@ public:
     size_t size() const { return first_.empty() ? 0 : first_.back(); }
 
 private:
-    friend TexelStitch StitchTexels(const BakeView&, const Atlas&, MapContent, TexelStitchStats*);
+    friend TexelStitch StitchTexels(const BakeView&, const Atlas&, MapContent, TexelStitchStats*,
+                                    uint64_t);
     struct Files;  // every chart's texels and values, in slot order, in temporary files
     int channels_ = 0;
     std::vector<uint32_t> first_;  // per chart and one more: its first slot
@@ -75,7 +81,12 @@ private:
 // The weight lambda of the seam samples against keeping a texel as shaded.
 constexpr double kSeamWeight = 100;
 
+// `memory_bytes` (the export's `export.stitch_rows` share) holds the seam samples in memory
+// while they fit, and lets the colour channels' CGs run in parallel when their vectors fit
+// too; past it the samples go to a temporary file and the channels are solved in turn. It
+// changes the time and memory, never the texels.
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,
-                         TexelStitchStats* stats = nullptr);
+                         TexelStitchStats* stats = nullptr,
+                         uint64_t memory_bytes = MemoryBudget(uint64_t(1) << 30).StitchRows());
 
 }  // namespace mebake::output

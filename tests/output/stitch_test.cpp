@@ -505,6 +505,52 @@ TEST_F(StitchTest, TexelsComeBackPerChart) {
     EXPECT_TRUE(stitch.Chart(uint32_t(view.chart_count())).texel.empty());
 }
 
+// The stitch's share decides where the seam samples live (memory or a temporary file) and
+// whether the colour channels' CGs run in parallel; the texels, the iterations and the
+// mismatch must be the same bits in all three ways, for any thread count.
+TEST_F(StitchTest, TexelsAreTheSameWhereverTheRowsLive) {
+    const GridOptions o = Perturbed();
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    const Atlas atlas = PackAtlas(ChartResolutions(view));
+    auto solve = [&](uint64_t memory_bytes, int threads, TexelStitchStats* stats) {
+        ThreadLimit limit(threads);
+        return StitchTexels(view, atlas, MapContent::Radiosity, stats, memory_bytes);
+    };
+    // 0: every row goes to the file; 64 rows: the first rows in memory, then all moved to
+    // the file; 256 KiB: one block of rows in memory, too little left for three channels'
+    // CGs (channels in turn); 64 MiB: rows and every channel's CG in memory (in parallel).
+    TexelStitchStats stats[4];
+    const TexelStitch on_disk = solve(0, 2, &stats[0]);
+    const TexelStitch moved = solve(64 * 64, 2, &stats[1]);
+    const TexelStitch in_turn = solve(256 * 1024, 2, &stats[2]);
+    const TexelStitch parallel = solve(uint64_t(64) << 20, 2, &stats[3]);
+    const TexelStitch one_thread = solve(uint64_t(64) << 20, 1, nullptr);
+    ASSERT_GT(stats[3].samples, 64u);
+    ASSERT_LT(stats[3].samples, 4096u);  // one block of rows
+    ASSERT_GT(stats[3].iterations, 1);
+    const bool in_memory[4] = {false, false, true, true}, in_parallel[4] = {false, false, false, true};
+    for (int k = 0; k < 4; ++k) {
+        EXPECT_EQ(stats[k].rows_in_memory, in_memory[k]) << k;
+        EXPECT_EQ(stats[k].channels_in_parallel, in_parallel[k]) << k;
+    }
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(stats[k].texels, stats[3].texels);
+        EXPECT_EQ(stats[k].samples, stats[3].samples);
+        EXPECT_EQ(stats[k].iterations, stats[3].iterations);
+        EXPECT_EQ(stats[k].rms_before, stats[3].rms_before);
+        EXPECT_EQ(stats[k].rms_after, stats[3].rms_after);
+    }
+    for (uint32_t c = 0; c < view.chart_count(); ++c) {
+        const StitchedTexels p = parallel.Chart(c);
+        for (const TexelStitch* other : {&on_disk, &moved, &in_turn, &one_thread}) {
+            const StitchedTexels t = other->Chart(c);
+            EXPECT_EQ(t.texel, p.texel) << "chart " << c;
+            EXPECT_EQ(t.values, p.values) << "chart " << c;
+        }
+    }
+}
+
 TEST_F(StitchTest, VertexCopiesAgree) {
     GridOptions o = Perturbed();
     o.tilt = 0.3f;
