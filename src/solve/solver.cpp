@@ -770,40 +770,43 @@ private:
         NodePoints(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        split_.Clear();
-        for (size_t p = 0; p < pts_.size(); ++p) {
+        // The pairs first, their segments only for the probes: the probes are a few of
+        // the pairs, and building every pair's segment was most of this function's cost.
+        split_pairs_.clear();
+        for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
-            const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b)
                 for (uint32_t a = 0; a < span; ++a) {
-                    const auto& t = texels[(lk.j * span + b) * row + lk.i * span + a];
+                    const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
+                    const auto& t = texels[k];
                     const Vec3f d = t.pos - rp.position;
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    split_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
-                                             {t.vis, t.nrm, t.radius, t.relief});
+                    split_pairs_.push_back({p, k});
                 }
         }
-        const size_t n = split_.size();
+        const size_t n = split_pairs_.size();
         const size_t probes = std::min(want, n / 2);
         if (probes < 2 || ratio > double(probes))
             return kVisUnknown;
-        const size_t hidden = TraceProbes(split_, probes);
+        probe_.Clear();
+        for (size_t k = 0; k < probes; ++k) {
+            const auto [p, tk] = split_pairs_[ProbePair(k, n, probes)];
+            const ReceiverPoint& rp = pts_[p];
+            const auto& t = texels[tk];
+            probe_.AddSegmentBetween(rp.vis_point + rp.normal * eps_, t.vis + t.nrm * eps_,
+                                     bounds_[p], {t.vis, t.nrm, t.radius, t.relief});
+        }
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        const size_t hidden =
+            size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
         return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
     }
 
-    // Probe k of n segments is segment ProbePair(k): increasing, and distinct as n >= 2
-    // probes. TraceProbes traces those of `from` into probe_ and returns how many are blocked.
+    // Probe k of n pairs is pair ProbePair(k): increasing, and distinct as n >= 2 probes.
     static size_t ProbePair(size_t k, size_t n, size_t probes) {
         return (2 * k + 1) * n / (2 * probes);
-    }
-    size_t TraceProbes(const SegmentBatch& from, size_t probes) {
-        probe_.Clear();
-        for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(from.segments[ProbePair(k, from.size(), probes)]);
-        probe_.Trace(s_.vis_, RayKind::kLink);
-        return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
     }
 
     // The own samples of node's receiver points (pts_, NodePoints) for their link rays
@@ -939,7 +942,11 @@ private:
     std::array<TexelSource, 4> facets_;  // Emitter::FacetsOf()
     std::array<Vec3f, 4> facet_vis_;
     std::vector<float> e9_, vals_, coeffs_;
-    SegmentBatch batch_, probe_, rest_, split_;  // split_: SplitVisibility's own
+    SegmentBatch batch_, probe_, rest_;
+    struct SplitPair {
+        uint32_t point, texel;
+    };
+    std::vector<SplitPair> split_pairs_;  // SplitVisibility's pairs, in trace order
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1
