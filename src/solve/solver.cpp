@@ -804,8 +804,7 @@ private:
                                      bounds_[p], {t.vis, t.nrm, t.radius, t.relief});
         }
         probe_.Trace(s_.vis_, RayKind::kLink);
-        const size_t hidden =
-            size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
+        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
         return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
     }
 
