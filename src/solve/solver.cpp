@@ -670,8 +670,13 @@ private:
                 for (int k = 0; k < 3; ++k)
                     e9_[pr.point * 9 + size_t(3 * c + k)] += db[c] * pr.contribution[k];
         }
-        ToFieldValues(pts, albedo, e9_, s_.opt_.settings.radiosity, &vals_);
         float* acc = NodeValues(d.node);
+        if (!s_.opt_.settings.radiosity) {  // E itself: ToFieldValues() would copy it
+            for (size_t k = 0; k < e9_.size(); ++k)
+                acc[k] += e9_[k];
+            return;
+        }
+        ToFieldValues(pts, albedo, e9_, true, &vals_);
         for (size_t k = 0; k < vals_.size(); ++k)
             acc[k] += vals_[k];
     }
@@ -718,13 +723,15 @@ private:
         return &node_values_[size_t(node_slot_[n]) * values_per_node_];
     }
 
-    // Node n's Gauss points, albedo and link-ray bounds into pts_, albedo_ and bounds_. The
-    // refinement comes back to a node for every emitter and between its regions' subtrees,
-    // so those of the last kPointSlots nodes seen are kept (slot n mod kPointSlots: the same
-    // values whatever was evicted, so the same result).
+    // Node n's Gauss points, albedo and link-ray bounds: pts_, albedo_ and bounds_ view them
+    // in their slot. The refinement comes back to a node for every emitter and between its
+    // regions' subtrees, so those of the last kPointSlots nodes seen are kept (slot n mod
+    // kPointSlots: the same values whatever was evicted, so the same result). They are read
+    // in place (copying them out of the slot at every change of node was 2 % of the horse's
+    // bounces).
     void NodePoints(size_t n) {
         if (n == pts_node_)
-            return;
+            return;  // the last slot filled or read is n's: still in place
         const size_t per = size_t(ng_ * ng_), slot = n % kPointSlots;
         if (point_slot_node_.empty()) {
             point_slot_node_.assign(kPointSlots, SIZE_MAX);
@@ -732,16 +739,14 @@ private:
             albedo_cache_.resize(kPointSlots * per);
             bounds_cache_.resize(kPointSlots * per);
         }
-        if (point_slot_node_[slot] == n) {
-            pts_.assign(&point_cache_[slot * per], &point_cache_[slot * per] + per);
-            albedo_.assign(&albedo_cache_[slot * per], &albedo_cache_[slot * per] + per);
-            bounds_.assign(&bounds_cache_[slot * per], &bounds_cache_[slot * per] + per);
-        } else {
-            s_.GaussPoints(sc_, field_.node(n), ng_, false, &pts_, &albedo_);
-            ReceiverBounds(n);
-            std::copy(pts_.begin(), pts_.end(), &point_cache_[slot * per]);
-            std::copy(albedo_.begin(), albedo_.end(), &albedo_cache_[slot * per]);
-            std::copy(bounds_.begin(), bounds_.end(), &bounds_cache_[slot * per]);
+        pts_ = {&point_cache_[slot * per], per};
+        albedo_ = {&albedo_cache_[slot * per], per};
+        bounds_ = {&bounds_cache_[slot * per], per};
+        if (point_slot_node_[slot] != n) {
+            s_.GaussPoints(sc_, field_.node(n), ng_, false, &gauss_pts_, &gauss_albedo_);
+            std::copy(gauss_pts_.begin(), gauss_pts_.end(), &point_cache_[slot * per]);
+            std::copy(gauss_albedo_.begin(), gauss_albedo_.end(), &albedo_cache_[slot * per]);
+            ReceiverBounds(n, &bounds_cache_[slot * per]);
             point_slot_node_[slot] = n;
         }
         pts_node_ = n;
@@ -770,51 +775,52 @@ private:
         NodePoints(lk.node);
         const auto& texels = em.levels[size_t(ls)];
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        split_.Clear();
-        for (size_t p = 0; p < pts_.size(); ++p) {
+        // The pairs first, their segments only for the probes: the probes are a few of
+        // the pairs, and building every pair's segment was most of this function's cost.
+        split_pairs_.clear();
+        for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
-            const Vec3f org = rp.vis_point + rp.normal * eps_;
             for (uint32_t b = 0; b < span; ++b)
                 for (uint32_t a = 0; a < span; ++a) {
-                    const auto& t = texels[(lk.j * span + b) * row + lk.i * span + a];
+                    const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
+                    const auto& t = texels[k];
                     const Vec3f d = t.pos - rp.position;
                     if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
                         Dot(d, t.nrm) >= 0)
                         continue;  // this pair cannot carry light
-                    split_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
-                                             {t.vis, t.nrm, t.radius, t.relief});
+                    split_pairs_.push_back({p, k});
                 }
         }
-        const size_t n = split_.size();
+        const size_t n = split_pairs_.size();
         const size_t probes = std::min(want, n / 2);
         if (probes < 2 || ratio > double(probes))
             return kVisUnknown;
-        const size_t hidden = TraceProbes(split_, probes);
+        probe_.Clear();
+        for (size_t k = 0; k < probes; ++k) {
+            const auto [p, tk] = split_pairs_[ProbePair(k, n, probes)];
+            const ReceiverPoint& rp = pts_[p];
+            const auto& t = texels[tk];
+            probe_.AddSegmentBetween(rp.vis_point + rp.normal * eps_, t.vis + t.nrm * eps_,
+                                     bounds_[p], {t.vis, t.nrm, t.radius, t.relief});
+        }
+        probe_.Trace(s_.vis_, RayKind::kLink);
+        const size_t hidden = size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
         return hidden == 0 ? kVisible : hidden == probes ? kHidden : kVisUnknown;
     }
 
-    // Probe k of n segments is segment ProbePair(k): increasing, and distinct as n >= 2
-    // probes. TraceProbes traces those of `from` into probe_ and returns how many are blocked.
+    // Probe k of n pairs is pair ProbePair(k): increasing, and distinct as n >= 2 probes.
     static size_t ProbePair(size_t k, size_t n, size_t probes) {
         return (2 * k + 1) * n / (2 * probes);
     }
-    size_t TraceProbes(const SegmentBatch& from, size_t probes) {
-        probe_.Clear();
-        for (size_t k = 0; k < probes; ++k)
-            probe_.segments.push_back(from.segments[ProbePair(k, from.size(), probes)]);
-        probe_.Trace(s_.vis_, RayKind::kLink);
-        return size_t(std::count(probe_.occluded.begin(), probe_.occluded.end(), 1));
-    }
 
     // The own samples of node's receiver points (pts_, NodePoints) for their link rays
-    // (SegmentBatch::AddSegmentBetween), into bounds_: the geometry texel each Gauss point is
+    // (SegmentBatch::AddSegmentBetween), into out[]: the geometry texel each Gauss point is
     // sampled from (GaussPoints' level) and its children's relief about the point's plane,
     // the finest geometry texels taken as flat (as an emitter sample's, Texel::relief).
-    void ReceiverBounds(size_t node) {
+    void ReceiverBounds(size_t node, SampleBound* out) const {
         const QuadNode& nd = field_.node(node);
         const int gl = std::min(finest_, int(nd.level) + 2);
         const uint32_t res = 1u << gl;
-        bounds_.clear();
         for (int p = 0; p < ng_ * ng_; ++p) {
             double s, t, w;
             GaussPoint2D(ng_, p, &s, &t, &w);
@@ -828,7 +834,7 @@ private:
                     b.relief = std::max(b.relief, ReliefOf(rp.vis_point, rp.normal, k.position,
                                                            k.normal, k.radius, 0.f));
             }
-            bounds_.push_back(b);
+            out[p] = b;
         }
     }
 
@@ -922,9 +928,11 @@ private:
     size_t set_node_ = SIZE_MAX;  // the node of the last points in set_pts_
     std::vector<LinkSide> node_shapes_;  // NodeShape(), radius < 0: not yet computed
     std::vector<Vec3f> cone_normals_;
-    std::vector<ReceiverPoint> pts_;
-    std::vector<SampleBound> bounds_;  // ReceiverBounds(): of pts_
-    std::vector<Vec3f> albedo_;
+    std::span<const ReceiverPoint> pts_;  // NodePoints(): in their slot
+    std::span<const Vec3f> albedo_;
+    std::span<const SampleBound> bounds_;  // ReceiverBounds(): of pts_
+    std::vector<ReceiverPoint> gauss_pts_;  // GaussPoints() for a slot
+    std::vector<Vec3f> gauss_albedo_;
     static constexpr size_t kPointSlots = 1024;  // x 9 points x 104 B at M2: 0.96 MB
     std::vector<size_t> point_slot_node_;        // per slot: its node, or SIZE_MAX
     std::vector<ReceiverPoint> point_cache_;
@@ -939,7 +947,11 @@ private:
     std::array<TexelSource, 4> facets_;  // Emitter::FacetsOf()
     std::array<Vec3f, 4> facet_vis_;
     std::vector<float> e9_, vals_, coeffs_;
-    SegmentBatch batch_, probe_, rest_, split_;  // split_: SplitVisibility's own
+    SegmentBatch batch_, probe_, rest_;
+    struct SplitPair {
+        uint32_t point, texel;
+    };
+    std::vector<SplitPair> split_pairs_;  // SplitVisibility's pairs, in trace order
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1
