@@ -56,6 +56,7 @@ stream::IngestOptions ToIngestOptions(const IngestCommand& c) {
     opt.force = c.force;
     opt.ground = c.ground;
     opt.orient = !c.keep_winding;
+    opt.merge_horizon_cells = c.merge_horizon_cells;
     opt.up = UpOption(c.up);
     return opt;
 }

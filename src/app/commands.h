@@ -40,6 +40,7 @@ struct IngestCommand {
     bool force = false;
     bool ground = false;
     bool keep_winding = false;  // no orientation pass (stream/orient.h)
+    bool merge_horizon_cells = false;  // stream/chart_builder.h
     std::string up;             // x, -x, y, ... ; empty: detected (stream/up_axis.h)
 };
 int RunIngest(const IngestCommand& opt);

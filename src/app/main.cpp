@@ -125,6 +125,9 @@ int main(int argc, char** argv) {
                       "Keep every component's winding as read. Default: a closed or nearly closed "
                       "component wound inwards (negative enclosed volume) is turned outwards, "
                       "unless its box contains or lies in another's (a room, a cavity)");
+    ing_cmd->add_flag("--merge-horizon-cells", ing.merge_horizon_cells,
+                      "Merge charts with their turning bounded on cells of 8 light-map texels "
+                      "instead of an 8 x 8 grid per chart: fewer, larger charts");
 
     // solve
     mebake::app::SolveCommand sol;

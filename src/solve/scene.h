@@ -66,6 +66,10 @@ struct SolverSettings {
     // Opt-in deeper sky: 4 and 4 (docs/method.md, "Sky").
     int sky_extra_levels = 2;
     double sky_fit_floor = 0;
+    // The finest emitter samples (Solver::EmitterTop): at most this many light-map texels a
+    // side on charts larger than 32 x 32 of them (a power of two; 0: 32 x 32 per chart
+    // whatever its size).
+    int emitter_texels = 0;
 };
 
 struct Scene {

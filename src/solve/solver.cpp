@@ -114,6 +114,16 @@ size_t Solver::NodeBudget(const SolveChart& sc) const {
     return opt_.max_nodes_per_chart << (2 * extra);
 }
 
+int Solver::EmitterTop(const SolveChart& sc) const {
+    const int finest = sc.geometry.finest_level();
+    int top = opt_.max_emitter_level;
+    if (opt_.settings.emitter_texels > 0) {
+        const int texel_level = sc.max_level >= 0 ? sc.max_level : finest;
+        top = std::max(top, texel_level - std::countr_zero(unsigned(opt_.settings.emitter_texels)));
+    }
+    return std::min(finest, top);
+}
+
 Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
                        const stream::SurfaceSample& smp) {
     // Rays start from the finest geometry, not from the coarser level the point's E is
@@ -179,7 +189,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
     const RegionPin field_pin = field.Pin();
-    const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
+    const int top = EmitterTop(sc);
     e->chart = chart;
     e->scale = sc.scale;
     e->levels.assign(size_t(top) + 1, {});
@@ -326,7 +336,7 @@ double Solver::ReflectedPower(uint32_t chart) const {
     const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
     const RegionPin field_pin = field.Pin();
-    const int top = std::min(sc.geometry.finest_level(), opt_.max_emitter_level);
+    const int top = EmitterTop(sc);
     const uint32_t n = 1u << top;
     double p = 0;
     for (uint32_t j = 0; j < n; ++j) {

@@ -235,6 +235,8 @@ private:
     // The solver's scalar of a colour: the mean of its channels.
     static float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
     size_t NodeBudget(const SolveChart& sc) const;
+    // The finest emitter sample level of a chart (SolverSettings::emitter_texels).
+    int EmitterTop(const SolveChart& sc) const;
     static Vec3f VisPoint(const SolveChart& sc, int level, float u, float v,
                           const stream::SurfaceSample& smp);
     void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,

@@ -326,6 +326,7 @@ Manifest Ingest(const IngestOptions& opt) {
     ChartBuildOptions copt;
     copt.texel_size = m.texel_size;
     copt.max_distortion = opt.max_distortion;
+    copt.merge_horizon_cells = opt.merge_horizon_cells;
     // A brick reads its vertices in ascending id order, each page once: a few pages per
     // file are enough, and a fixed size keeps peak memory independent of the mesh.
     copt.cache_bytes = uint64_t(3) << 20;

@@ -35,6 +35,8 @@ struct IngestOptions {
     bool ground = false;                      // add a ground plane under the inputs (ground.h)
     std::optional<Vec3d> up;                  // the scans' up axis; none: detected (up_axis.h)
     bool orient = true;                       // turn inside-out components outwards (orient.h)
+    // The merge's turn bound on cells of 8 light-map texels (ChartBuildOptions).
+    bool merge_horizon_cells = false;
     // The layout, fixed whatever `memory` (tests make them small to get many bricks or a
     // clustered proxy from a small mesh).
     uint64_t brick_faces = 400000;            // at most per brick (charts end at brick borders)

@@ -159,9 +159,11 @@ std::string CheckIngestReusable(const IngestOptions& c) {
         // Directories from before the orientation pass and up detection: ingest again.
         if (it == m.options.end() && (key == "orient" || key == "up"))
             return "it was ingested before the " + key + " option existed";
-        // Directories from before --ground existed have no ground.
-        const std::string had =
-            it != m.options.end() ? it->second : key == "ground" ? "0" : "(none)";
+        // Directories from before --ground / --merge-horizon-cells have neither.
+        const std::string had = it != m.options.end() ? it->second
+                                 : key == "ground"      ? "0"
+                                 : key == "merge_horizon_cells" ? "0"
+                                                                : "(none)";
         if (had != value)
             UsageError("{} was ingested with {} {}, this run asks for {}; pass --force to start "
                        "over",
@@ -179,6 +181,7 @@ std::vector<std::pair<std::string, std::string>> IngestOptionsRecord(const Inges
             {"memory", std::to_string(opt.memory)},
             {"texel_size", fmt::format("{:.17g}", opt.texel_size)},
             {"orient", opt.orient ? "1" : "0"},
+            {"merge_horizon_cells", opt.merge_horizon_cells ? "1" : "0"},
             {"up", opt.up ? AxisName(*opt.up) : "auto"}};
 }
 
