@@ -159,6 +159,10 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->link_tolerance = s.value("link_tolerance", o->link_tolerance);
     o->sky_extra_levels = s.value("sky_extra_levels", o->sky_extra_levels);
     o->sky_fit_floor = s.value("sky_fit_floor", o->sky_fit_floor);
+    o->sky_fit_total = s.value("sky_fit_total", o->sky_fit_total);
+    o->sky_deep_floor = s.value("sky_deep_floor", o->sky_deep_floor);
+    if (!(o->sky_deep_floor >= 0))
+        InputError({scene_file}, "solver.sky_deep_floor must be >= 0");
     if (o->sky_extra_levels < 0 || o->sky_extra_levels > 8)
         InputError({scene_file}, "solver.sky_extra_levels must be 0..8");
     if (!(o->sky_fit_floor >= 0))

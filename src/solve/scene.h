@@ -66,6 +66,12 @@ struct SolverSettings {
     // Opt-in deeper sky: 4 and 4 (docs/method.md, "Sky").
     int sky_extra_levels = 2;
     double sky_fit_floor = 0;
+    // ... and the tolerance is relative to the node's whole direct light (lights + sky), as
+    // the lights' own fit, rather than to the sky alone (Solver::TotalScale).
+    bool sky_fit_total = false;
+    // ... and nodes two or more levels below the sky's gathering level (below the default's
+    // depth) only where it misses by more than sky_deep_floor shares (0: sky_fit_floor).
+    double sky_deep_floor = 0;
 };
 
 struct Scene {

@@ -217,6 +217,8 @@ private:
     float SimplifiedNode(const QuadNode& node, bool control, DirectSampler& sampler,
                          SimplifiedFit& sf, std::vector<float>& coeffs);
     void GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level);
+    float TotalScale(const ChartField& field, size_t n, const DirectSampler& sampler,
+                     int gc) const;
     // refine_indirect.cpp: leaves split for the first bounce before the gather starts.
     void RefineForBounces(uint32_t chart, int max_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
