@@ -48,6 +48,10 @@ constexpr int kEdgeGrid = 16;
 // texels could hold the step. Such nodes are split this many levels below the cap.
 constexpr int kEdgeLevelsBelowCap = 1;
 
+// The depth below sky_level the default sky is tested to (SolverSettings::sky_extra_levels'
+// default): nodes deeper than that are GatherSky's deep levels (sky_deep_floor).
+constexpr int kSkyDefaultDepth = 2;
+
 // The direct light's ray offset, in units of Solver::RayOffset (half a light-map texel).
 constexpr float kDirectOffset = 0.25f;
 
@@ -576,10 +580,15 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
     const int deepest = std::min(max_level, sky_level + opt_.settings.sky_extra_levels);
     const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
     const float steps = float(opt_.settings.sky_fit_floor) * direct.SkyDirectionShare();
+    // Nodes two or more levels below sky_level (which the default's depth never tests)
+    // split only on a miss of sky_deep_floor shares: a few nodes whose fit is far off.
+    const float deep_steps =
+        std::max(steps, float(opt_.settings.sky_deep_floor) * direct.SkyDirectionShare());
     DirectSampler sampler(*this, charts_[chart], order, max_level, direct);
     sampler.parts = DirectLight::kSky;
     sampler.use_probes = true;  // small nodes: directions shared with the probes (SkyShared)
     std::vector<float> coeffs(size_t(field.stride()));
+    const size_t nodes_before = field.node_count();
     // Nodes to visit, each with the directions its tested parent's probes agreed on.
     std::vector<std::pair<size_t, std::vector<uint8_t>>> stack;
     stack.emplace_back(0, std::vector<uint8_t>{});
@@ -601,7 +610,9 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
                 const float scale = std::max(
                     {MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
                 split = ControlGridError(order, gc, coeffs.data(), blocks,
-                                         sampler.ctrl_vals.data()) > std::max(tol * scale, steps);
+                                         sampler.ctrl_vals.data()) >
+                        std::max(tol * scale,
+                                 int(node.level) >= sky_level + kSkyDefaultDepth ? deep_steps : steps);
                 if (split && node.leaf())
                     field.Subdivide(n);
                 if (split)
@@ -619,6 +630,8 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
             pend[k] += coeffs[size_t(k)];
     }
     field.PushPending();
+    spdlog::debug("chart {}: sky from level {} to {} (cap {}): {} nodes added", chart, sky_level,
+                  deepest, max_level, field.node_count() - nodes_before);
 }
 
 }  // namespace mebake::solve
