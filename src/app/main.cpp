@@ -127,7 +127,8 @@ int main(int argc, char** argv) {
                       "unless its box contains or lies in another's (a room, a cavity)");
     ing_cmd->add_flag("--merge-horizon-cells", ing.merge_horizon_cells,
                       "Merge charts with their turning bounded on cells of 8 light-map texels "
-                      "instead of an 8 x 8 grid per chart: fewer, larger charts");
+                      "instead of an 8 x 8 grid per chart: fewer, larger charts (experimental: "
+                      "lucy 237 -> 86 charts but less accurate; docs/method.md, \"Merging\")");
 
     // solve
     mebake::app::SolveCommand sol;
