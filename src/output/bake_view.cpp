@@ -150,9 +150,9 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     // (n . E)+ is 0 and the pixel showed black (lucy's away picture, bench/RESULTS.md
     // "Issue 14 (session 15)").
     const Vec3d p0(tile_.position[f[0]]), p1(tile_.position[f[1]]), p2(tile_.position[f[2]]);
-    const Vec3d face = Normalize(Cross(p1 - p0, p2 - p0));
+    const Vec3d face = Cross(p1 - p0, p2 - p0);  // normalized only when it is taken
     if (!(Dot(n, face) > 0) && Dot(face, face) > 0)
-        n = face;
+        n = Normalize(face);
     if (!(Dot(n, n) > 0))
         n = Vec3d(0, 0, 1);
     p.uv = uv;
