@@ -268,15 +268,6 @@ bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
     return false;
 }
 
-// The direction into an outline point's chart at its visibility point: from the virtual
-// position toward it, in the plane across the normal (zero where the two coincide).
-static Vec3f Inward(const ReceiverPoint& rp) {
-    Vec3f d = rp.vis_point - rp.position;
-    d = d - rp.normal * Dot(d, rp.normal);
-    const float len = Length(d);
-    return len > 0 ? d * (1.f / len) : Vec3f{};
-}
-
 // A receiver's visibility point is interpolated between geometry-image texel centres, and
 // that chord leaves the real surface where it turns within a texel: on a convex bend it
 // runs under it (a rim, a fold of drapery), and rays from there hit the surface they leave

@@ -35,6 +35,16 @@ struct ReceiverPoint {
     bool outline = false;
 };
 
+// The direction into a virtual point's chart at its visibility point: from the
+// extrapolated position toward it, in the plane across the normal (zero where they
+// coincide).
+inline Vec3f Inward(const ReceiverPoint& rp) {
+    Vec3f d = rp.vis_point - rp.position;
+    d = d - rp.normal * Dot(d, rp.normal);
+    const float len = Length(d);
+    return len > 0 ? d * (1.f / len) : Vec3f{};
+}
+
 // Whether direction w (from the point) lies above its horizon and its face plane.
 inline bool AboveSurface(const ReceiverPoint& rp, const Vec3f& w) {
     return Dot(w, rp.horizon) >= 0 && Dot(w, rp.face) >= 0;
