@@ -43,7 +43,8 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
       sky_(scene.sky),
       offset_(ray_offset),
       reach_(surface_reach > 0 ? surface_reach : ray_offset * kOriginReach),
-      far_(scene_size * 100) {
+      far_(scene_size * 100),
+      outline_face_inside_(settings.outline_face_inside) {
     const int per_tri =
         std::max(2, int(std::ceil(std::sqrt(double(settings.light_samples)) - 1e-9)));
     for (const auto& pl : scene.lights) {
@@ -311,10 +312,19 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     // normal field turns between vertex normals, and across a fold of large triangles a
     // face can tilt from it by 15 degrees or more: grazing key light the face cannot see
     // counted in full there (lucy's worst point, bench/RESULTS.md "Issue 14 (session 9)").
+    // An outline point's visibility point lies on the edge its chart shares with the
+    // neighbour, and the ray from there may meet either side: across a bend the
+    // neighbour's plane cut light the chart's own border points see (lucy, bench/
+    // RESULTS.md "Issue 14 (session 15)"). With outline_face_inside the ray starts half a
+    // light-map texel inside the chart (toward the visibility point from the virtual
+    // position), so the face is the chart's own real edge, whose cut its real points have
+    // too (a key grazing that edge stays cut: turbineblade, session 16).
     std::vector<Segment> segs(moved.size());
     for (size_t k = 0; k < moved.size(); ++k) {
         const ReceiverPoint& rp = out[moved[k]];
-        const Vec3f o = rp.vis_point + rp.normal * offset_;
+        Vec3f o = rp.vis_point + rp.normal * offset_;
+        if (outline_face_inside_ && rp.outline)
+            o = o + Inward(rp) * offset_;
         const Vec3f n = rp.normal * -1.f;
         segs[k] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, 2 * offset_};
     }

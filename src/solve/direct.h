@@ -30,7 +30,20 @@ struct ReceiverPoint {
     // DirectLight itself): light below it is blocked by the surface, as in the path
     // tracer. Zero: not known (no cut).
     Vec3f face{};
+    // A virtual point (the seed's x' rule): its position is extrapolated past the chart's
+    // real part and its visibility point lies on the chart's outline (Solver::PointAt).
+    bool outline = false;
 };
+
+// The direction into a virtual point's chart at its visibility point: from the
+// extrapolated position toward it, in the plane across the normal (zero where they
+// coincide).
+inline Vec3f Inward(const ReceiverPoint& rp) {
+    Vec3f d = rp.vis_point - rp.position;
+    d = d - rp.normal * Dot(d, rp.normal);
+    const float len = Length(d);
+    return len > 0 ? d * (1.f / len) : Vec3f{};
+}
 
 // Whether direction w (from the point) lies above its horizon and its face plane.
 inline bool AboveSurface(const ReceiverPoint& rp, const Vec3f& w) {
@@ -154,6 +167,7 @@ private:
     // under or above it (one ray each along the normal, at most reach_ long), and, for
     // points with a horizon, the plane of the face under their shadow-ray origin (`face`).
     // lights_only: only the points some light reaches (the others as they are; no ray).
+    // With outline_face_inside, an outline point's face is looked for just inside its chart.
     std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points,
                                          bool lights_only = false) const;
     class PenumbraPass;  // penumbra.cpp
@@ -165,6 +179,7 @@ private:
     Sky sky_;
     std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
     float offset_, reach_, far_;
+    bool outline_face_inside_;  // SolverSettings::outline_face_inside
 };
 
 // ClipToHalfSpace of polygon_light.h, returning the clipped polygon.

@@ -110,9 +110,7 @@ public:
             for (int a = 0; a < n; ++a) {
                 const float u = float(node.U((a + 0.5) / n)), v = float(node.V((b + 0.5) / n));
                 auto smp = SampleBilinear(sc_.geometry, gl, u, v);
-                edge_pts_.push_back(ReceiverPoint{smp.position, smp.normal,
-                                                  VisPoint(sc_, gl, u, v, smp),
-                                                  HorizonNormal(sc_, u, v)});
+                edge_pts_.push_back(PointAt(sc_, gl, u, v, smp));
             }
         }
         return direct_.ShadowEdgeAmong(edge_pts_);
@@ -172,8 +170,7 @@ private:
         for (size_t k = 0; k < slot_.size(); ++k) {
             const auto [u, v] = Uv(node, slot_[k], n_gauss);
             auto smp = SampleBilinear(sc_.geometry, gl, u, v);
-            all_pts_[k] = ReceiverPoint{smp.position, smp.normal, VisPoint(sc_, gl, u, v, smp),
-                                        HorizonNormal(sc_, u, v)};
+            all_pts_[k] = PointAt(sc_, gl, u, v, smp);
             all_albedo_[k] = solver_.Albedo(smp.material, smp.color);
         }
         keys_.resize(probes);
@@ -371,8 +368,7 @@ void Solver::RefineDirect(uint32_t chart) {
             direct,
             [&](float u, float v) {
                 auto smp = SampleBilinear(sc.geometry, finest, u, v);
-                return ReceiverPoint{smp.position, smp.normal, VisPoint(sc, finest, u, v, smp),
-                                     HorizonNormal(sc, u, v)};
+                return PointAt(sc, finest, u, v, smp);
             },
             std::min(max_level, min_level + 1),
             std::max(min_level + 1, max_level - kBoundaryLevelsAboveCap));

@@ -164,6 +164,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
         (o->emitter_texels & (o->emitter_texels - 1)) != 0)
         InputError({scene_file}, "solver.emitter_texels must be 0 or a power of two up to 64");
     o->sky_deep_floor = s.value("sky_deep_floor", o->sky_deep_floor);
+    o->outline_face_inside = s.value("outline_face_inside", o->outline_face_inside);
     if (!(o->sky_deep_floor >= 0))
         InputError({scene_file}, "solver.sky_deep_floor must be >= 0");
     if (o->sky_extra_levels < 0 || o->sky_extra_levels > 8)

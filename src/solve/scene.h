@@ -73,6 +73,10 @@ struct SolverSettings {
     // Opt-in: nodes two or more levels below the sky's gathering level (below the default's
     // depth) split only where they miss by more than sky_deep_floor shares (0: sky_fit_floor).
     double sky_deep_floor = 0;
+    // A virtual receiver point's face plane (DirectLight::OnSurface) is its chart's real
+    // edge just inside the outline, not whichever face a ray at the outline meets (false:
+    // before session 16).
+    bool outline_face_inside = true;
 };
 
 struct Scene {

@@ -124,15 +124,20 @@ int Solver::EmitterTop(const SolveChart& sc) const {
     return std::min(finest, top);
 }
 
-Vec3f Solver::VisPoint(const SolveChart& sc, int level, float u, float v,
-                       const stream::SurfaceSample& smp) {
+ReceiverPoint Solver::PointAt(const SolveChart& sc, int level, float u, float v,
+                              const stream::SurfaceSample& smp, bool horizon) {
     // Rays start from the finest geometry, not from the coarser level the point's E is
     // sampled at: coarse texels average positions, which lie inside a convex surface by
     // the sagitta (a texel of 1/16 of a unit sphere's chart: 3e-3, six times the ray
     // offset), so rays from there hit the surface they leave and the sky went dark
     // between texel centres.
     const int finest = sc.geometry.finest_level();
-    return level >= finest ? smp.vis_point : SampleBilinear(sc.geometry, finest, u, v).vis_point;
+    const stream::SurfaceSample fine =
+        level >= finest ? smp : SampleBilinear(sc.geometry, finest, u, v);
+    ReceiverPoint rp{smp.position, smp.normal, fine.vis_point,
+                     horizon ? HorizonNormal(sc, u, v) : Vec3f{}};
+    rp.outline = !(fine.vis_point == fine.position);
+    return rp;
 }
 
 float Solver::RayOffset(uint32_t chart) const {
@@ -160,8 +165,7 @@ void Solver::GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, boo
         GaussPoint2D(ng, p, &s, &t, &w);
         const float u = float(node.U(s)), v = float(node.V(t));
         auto smp = SampleBilinear(sc.geometry, gl, u, v);
-        pts->push_back({smp.position, smp.normal, VisPoint(sc, gl, u, v, smp),
-                        horizon ? HorizonNormal(sc, u, v) : Vec3f{}});
+        pts->push_back(PointAt(sc, gl, u, v, smp, horizon));
         albedo->push_back(Albedo(smp.material, smp.color));
     }
 }

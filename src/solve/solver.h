@@ -237,8 +237,11 @@ private:
     size_t NodeBudget(const SolveChart& sc) const;
     // The finest emitter sample level of a chart (SolverSettings::emitter_texels).
     int EmitterTop(const SolveChart& sc) const;
-    static Vec3f VisPoint(const SolveChart& sc, int level, float u, float v,
-                          const stream::SurfaceSample& smp);
+    // The receiver point at chart coordinates (u, v), sampled (smp) from geometry level
+    // `level`: visibility from the finest level, `outline` where it is not taken at the
+    // point itself (a virtual point), and the horizon (HorizonNormal) when asked.
+    static ReceiverPoint PointAt(const SolveChart& sc, int level, float u, float v,
+                                 const stream::SurfaceSample& smp, bool horizon = true);
     void GaussPoints(const SolveChart& sc, const QuadNode& node, int ng, bool horizon,
                      std::vector<ReceiverPoint>* pts, std::vector<Vec3f>* albedo) const;
     static void ToFieldValues(std::span<const ReceiverPoint> pts, std::span<const Vec3f> albedo,

@@ -265,5 +265,70 @@ TEST(DirectLight, LightBelowThePointsFaceIsBlockedByIt) {
     EXPECT_FALSE(direct.ShadowEdgeAmong(on_flat));
 }
 
+// A chart's outline across a convex bend: face A (y = tA z, z < 0) is the chart's real
+// edge, face B (y = -tB z, z > 0) the neighbour's. A virtual point of A just past the
+// outline has its visibility point on the shared edge (here a hair on B's side, so the
+// ray down from it meets B), its position and normal extrapolated along A. A small light
+// at `elevation` degrees toward -z (toward: -1) or +z (+1), far away.
+struct BendScene {
+    Scene scene;
+    VisibilityScene vis;
+    PolygonLight light;
+    BendScene(double ta, double tb, double elevation, double toward) {
+        const double d = std::numbers::pi / 180;
+        const double up = std::sin(elevation * d), ahead = toward * std::cos(elevation * d);
+        const Vec3d c(0, 10 * up, 10 * ahead), a(1, 0, 0), b(0, ahead, -up);
+        const double h = 0.1;
+        light.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
+        light.radiance = {100, 100, 100};
+        light.two_sided = true;
+        scene.lights.push_back(light);
+        const float fa = float(ta), fb = float(tb);
+        std::vector<float> geo = {-1, -fa, -1, 1, -fa, -1, 1, 0, 0, -1, 0, 0,  // A
+                                  1, -fb, 1, -1, -fb, 1};                      // B
+        std::vector<uint32_t> tris = {0, 2, 1, 0, 3, 2, 3, 4, 2, 3, 5, 4};
+        vis.AddTriangles(geo, tris, "bend");
+        vis.Commit();
+    }
+    // The key light at A's virtual point, or at a real point at the same place.
+    double LightAt(bool inside, bool outline) {
+        scene.solver.outline_face_inside = inside;
+        DirectLight direct(scene, scene.solver, vis, 1e-3f, 100, 0.05f);
+        const Vec3f n(0, 1, 0);
+        ReceiverPoint rp{{0, 0, 0.01f}, n, {0, 0, 2e-4f}, n};
+        rp.outline = outline;
+        std::vector<float> e(9);
+        direct.Evaluate(std::span<const ReceiverPoint>(&rp, 1), e, DirectLight::kLights);
+        return e[1];
+    }
+    double Lit() const {
+        return IrradianceClipped(light.vertices, 100.0, Vec3d(0, 0, 0.01), Vec3d(0, 1, 0));
+    }
+};
+
+// The neighbour's plane must not cut light the chart's own edge sees: A flat, B falling
+// 30 degrees, the light 10 degrees up over A (below B's plane). With outline_face_inside
+// the virtual point takes A's face and the light; a real point there keeps B's face.
+TEST(DirectLight, OutlinePointTakesItsOwnEdgesFace) {
+    BendScene s(0, std::tan(30 * std::numbers::pi / 180), 10, -1);
+    const double lit = s.Lit();
+    ASSERT_GT(lit, 0);
+    EXPECT_NEAR(s.LightAt(false, true), 0, 1e-9);  // main's rule: B's plane cuts it
+    EXPECT_NEAR(s.LightAt(true, true), lit, 1e-3 * lit);
+    EXPECT_NEAR(s.LightAt(true, false), 0, 1e-9);  // not an outline point: as before
+}
+
+// ... and light the real edge's face does not see stays cut (a key grazing the edge,
+// turbineblade): A rises 10 degrees toward the outline, its smooth normal straight up, the
+// light 5 degrees up toward +z, above the normal's horizon and B's plane, below A's.
+TEST(DirectLight, OutlinePointKeepsItsOwnEdgesCut) {
+    const double d = std::numbers::pi / 180;
+    BendScene s(std::tan(10 * d), std::tan(30 * d), 5, 1);
+    const double lit = s.Lit();
+    ASSERT_GT(lit, 0);
+    EXPECT_NEAR(s.LightAt(false, true), lit, 1e-3 * lit);  // main's rule: B's plane, lit
+    EXPECT_NEAR(s.LightAt(true, true), 0, 1e-9);           // A's own face cuts it
+}
+
 }  // namespace
 }  // namespace mebake::solve
