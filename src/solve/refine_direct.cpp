@@ -618,9 +618,9 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
                 const float scale = std::max(
                     {MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
                 const int below = int(node.level) - (sky_level + kSkyDefaultDepth);
-                split = ControlGridError(order, gc, coeffs.data(), blocks,
-                                         sampler.ctrl_vals.data()) >
-                        std::max(tol * scale, below >= 0 ? deep_steps(below) : steps);
+                split =
+                    ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data()) >
+                    std::max(tol * scale, below >= 0 ? deep_steps(below) : steps);
                 if (split && node.leaf())
                     field.Subdivide(n);
                 if (split)
