@@ -569,17 +569,25 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
 // (the others as they found them): a direction every corner saw, or every corner found
 // occluded, was already taken so at the node's other points, and its fit missed for the
 // directions that change across it. This is what makes the deeper sky cheap: below the
-// parent, rays go only where the parent's visibility turns.
+// parent, rays go only where the parent's visibility turns. Below the default's depth the
+// floor is sky_deep_floor, doubled per level (deep_steps).
 void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int max_level) {
     ChartField& field = fields_[chart];
     const int order = field.order(), blocks = field.blocks(), ng = order + 1, gc = order + 2;
     const int deepest = std::min(max_level, sky_level + opt_.settings.sky_extra_levels);
     const float tol = float(opt_.settings.tolerance), floor = float(reference_ * 0.02);
     const float steps = float(opt_.settings.sky_fit_floor) * direct.SkyDirectionShare();
-    // Nodes two or more levels below sky_level (which the default's depth never tests)
-    // split only on a miss of sky_deep_floor shares: a few nodes whose fit is far off.
-    const float deep_steps =
-        std::max(steps, float(opt_.settings.sky_deep_floor) * direct.SkyDirectionShare());
+    // Nodes kSkyDefaultDepth or more levels below sky_level split only on a miss of
+    // sky_deep_floor shares (a few nodes whose fit is far off), twice that one level deeper
+    // and so on: the points are spread by area, so a node's part of their squared error is
+    // its miss squared times its area, and a node half as wide must miss twice as much to
+    // matter as much. (A floor the same at every deep level, session 15's, spent about twice the
+    // added leaves for nearly the same gain on lucy and the bunny: bench/RESULTS.md,
+    // "Issue 14 (session 16)".)
+    auto deep_steps = [&](int below) {
+        return std::max(steps, std::ldexp(float(opt_.settings.sky_deep_floor), below) *
+                                   direct.SkyDirectionShare());
+    };
     DirectSampler sampler(*this, charts_[chart], order, max_level, direct);
     sampler.parts = DirectLight::kSky;
     sampler.use_probes = true;  // small nodes: directions shared with the probes (SkyShared)
@@ -605,10 +613,10 @@ void Solver::GatherSky(uint32_t chart, DirectLight& direct, int sky_level, int m
             if (test) {
                 const float scale = std::max(
                     {MaxAbs(sampler.gauss_vals), MaxAbs(sampler.ctrl_vals), floor});
-                split = ControlGridError(order, gc, coeffs.data(), blocks,
-                                         sampler.ctrl_vals.data()) >
-                        std::max(tol * scale,
-                                 int(node.level) >= sky_level + kSkyDefaultDepth ? deep_steps : steps);
+                const int below = int(node.level) - (sky_level + kSkyDefaultDepth);
+                split =
+                    ControlGridError(order, gc, coeffs.data(), blocks, sampler.ctrl_vals.data()) >
+                    std::max(tol * scale, below >= 0 ? deep_steps(below) : steps);
                 if (split && node.leaf())
                     field.Subdivide(n);
                 if (split)

@@ -70,8 +70,8 @@ struct SolverSettings {
     // side on charts larger than 32 x 32 of them (a power of two; 0: 32 x 32 per chart
     // whatever its size).
     int emitter_texels = 0;
-    // Opt-in: nodes two or more levels below the sky's gathering level (below the default's
-    // depth) split only where they miss by more than sky_deep_floor shares (0: sky_fit_floor).
+    // Opt-in: nodes two or more levels below the sky's gathering level split only where they
+    // miss by more than sky_deep_floor shares, doubled per level deeper (0: sky_fit_floor).
     double sky_deep_floor = 0;
     // A virtual receiver point's face plane (DirectLight::OnSurface) is its chart's real
     // edge just inside the outline, not whichever face a ray at the outline meets (false:

@@ -509,7 +509,7 @@ struct WallSky {
 // floor's irradiance at the RMS's sample points.
 WallSky SolveTheFloorBesideAWall(int extra, double floor, float key = 0,
                                  std::vector<double>* got = nullptr, double deep_floor = 0,
-                                 bool plate = false) {
+                                 bool plate = false, int texels = 256) {
     TestScene ts;
     if (plate) {
         // A plate 0.1 wide and 0.005 over the floor from x = 1 (along z): under it the
@@ -528,7 +528,7 @@ WallSky SolveTheFloorBesideAWall(int extra, double floor, float key = 0,
             std::reverse(light.vertices.begin(), light.vertices.end());
         ts.scene.lights.push_back(light);
     }
-    FloorBesideAWall(&ts, 256);
+    FloorBesideAWall(&ts, texels);
     const float h = kWallHeight;
     SolveOptions opt;
     opt.settings.max_bounces = 0;
@@ -616,6 +616,34 @@ TEST(Solver, SkyDeepFloorSplitsOnlyWhereTheFitIsFarOff) {
     EXPECT_GT(plate_deep.leaves, plate_two.leaves) << "the plate's edges split below the default's depth";
     EXPECT_LT(plate_deep.leaves, plate_four.leaves);
     EXPECT_LT(d_deep, 0.5 * d_two) << "and most of the deep sky's gain there is kept";
+}
+
+// sky_deep_floor doubles per level below the first deep one (a node's part of the points'
+// squared error is its miss squared times its area): beside the plate on a 1024-texel
+// chart (the cap six levels below sky_level), allowing two more levels than four adds
+// few leaves, since the plate's step (at most the open sky, 64 shares) cannot miss by the
+// floor's 32 and 64 shares there. The same floor at every deep level (session 15's) split
+// the step's nodes down to the cap.
+TEST(Solver, SkyDeepFloorDoublesPerLevel) {
+    std::vector<double> e_two, e_four, e_six, e_tol;
+    const WallSky two = SolveTheFloorBesideAWall(2, 0, 0, &e_two, 0, true, 1024),
+                  four = SolveTheFloorBesideAWall(4, 0, 0, &e_four, 8, true, 1024),
+                  six = SolveTheFloorBesideAWall(6, 0, 0, &e_six, 8, true, 1024),
+                  tol = SolveTheFloorBesideAWall(6, 0, 0, &e_tol, 0, true, 1024);
+    double d_two = 0, d_six = 0;
+    for (size_t k = 0; k < e_tol.size(); ++k) {
+        d_two += (e_two[k] - e_tol[k]) * (e_two[k] - e_tol[k]);
+        d_six += (e_six[k] - e_tol[k]) * (e_six[k] - e_tol[k]);
+    }
+    std::printf("plate, 1024 texels: leaves default %llu, deep floor 8 to +4 %llu, to +6 %llu, "
+                "tolerance alone to +6 %llu; rms vs the tolerance alone %.4f -> %.4f\n",
+                (unsigned long long)two.leaves, (unsigned long long)four.leaves,
+                (unsigned long long)six.leaves, (unsigned long long)tol.leaves,
+                std::sqrt(d_two / double(e_tol.size())), std::sqrt(d_six / double(e_tol.size())));
+    EXPECT_GT(four.leaves, two.leaves) << "the plate's edges split below the default's depth";
+    EXPECT_LT(six.leaves - four.leaves, (four.leaves - two.leaves) / 2)
+        << "two more levels add few leaves: the floor doubles per level";
+    EXPECT_LT(d_six, 0.5 * d_two) << "most of the deep sky's gain kept";
 }
 
 // A V-groove folded inside one chart (walls at 60 degrees to the horizontal, 60 degrees
