@@ -174,6 +174,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     popt.refine_options.max_iterations = opt.refine_iterations;
     MergeReport mreport;
     std::vector<ChartParam> merged_params;  // per chart after merging, when computed
+    std::vector<uint8_t> united;            // per chart after merging: 1 for a union
     if (opt.merge_charts) {
         MergeOptions mopt;
         mopt.param = popt;
@@ -194,7 +195,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             mopt.min_resolution = opt.min_resolution;
             mopt.max_resolution = opt.max_resolution;
         }
-        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params);
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united);
     }
 
     // Charts in id order; a chart that fails (not a disc, flipped or overlapping, too distorted) is split
@@ -205,6 +206,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         TriMesh chart;
         int depth = 0;
         ChartParam param;
+        bool united = false;  // a union from the merge (its own geometry resolution)
     };
     std::deque<Pending> queue;
     {
@@ -213,6 +215,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             queue.push_back({std::move(charts[c]), 0, {}});
             if (merged_params.size() == charts.size())
                 queue.back().param = std::move(merged_params[c]);
+            queue.back().united = opt.merge_horizon_cells && united.size() == charts.size() &&
+                                  united[c];
         }
     }
     clock.Lap(kSegment);
@@ -274,8 +278,9 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         tile.grid = BuildChartGrid(tile.uv, tile.triangles, grid_res);
         clock.Lap(kGrid);
         const uint32_t res = ResolutionFor(param.scale, opt);
-        tile.geometry = SampleGeometry(chart, param, tile.grid, tile.normal,
-                                       std::min(res, opt.max_geometry_resolution));
+        tile.geometry = SampleGeometry(
+            chart, param, tile.grid, tile.normal,
+            std::min(res, item.united ? opt.union_geometry_resolution : opt.max_geometry_resolution));
         clock.Lap(kGeometry);
 
         ChartMeta& m = tile.meta;

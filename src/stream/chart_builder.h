@@ -49,6 +49,13 @@ struct ChartBuildOptions {
     // chart: fewer charts (lucy 86 against 237), less accurate on five of seven scans (see
     // chart_builder.cpp).
     bool merge_horizon_cells = false;
+    // With merge_horizon_cells, a union's geometry image is at most this many texels a side
+    // (other charts: max_geometry_resolution), so a 512-texel union samples its geometry
+    // every 2 x 2 texels, as a 256-texel chart does, not every 4 x 4: the turbine blade's
+    // thin edges on 512-texel unions came out 45-74 % dark at 128 (merged + emitter_texels 4:
+    // +0.87 -> +0.15 point against main at the same points; 512 samples leaked light in the
+    // horse's folds, +0.95; bench/RESULTS.md, "Issue 13 (session 16)").
+    uint32_t union_geometry_resolution = 256;
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 

@@ -270,6 +270,7 @@ struct MergeState {
     std::vector<std::vector<uint32_t>> faces_of;
     std::vector<double> area;
     std::vector<Trial> live;                           // square < 0: never merged
+    std::vector<uint8_t> joined;                       // 1: a union of input charts
     std::set<std::pair<uint32_t, uint32_t>> rejected;  // pairs tried once and failed
 
     Trial TryUnion(const std::vector<uint32_t>& fa, const std::vector<uint32_t>& fb) const {
@@ -315,6 +316,7 @@ struct MergeState {
         std::vector<uint32_t>().swap(faces_of[b]);
         live[a] = std::move(united);
         live[b] = Trial{};
+        joined[a] = 1;
         area[a] += area[b];
         area[b] = 0;
     }
@@ -323,10 +325,13 @@ struct MergeState {
 }  // namespace
 
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
-                        std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params) {
+                        std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params,
+                        std::vector<uint8_t>* united) {
     std::vector<uint32_t>& chart = *chart_of;
     if (params)
         params->clear();
+    if (united)
+        united->clear();
     CHECK_EQ(chart.size(), mesh.triangle_count());
     MergeReport report;
     size_t chart_count = 0;
@@ -337,7 +342,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         return report;
     const Geometry g = Measure(mesh);
     const double fold_cos = std::cos(options.fold_deg * kPi / 180);
-    MergeState st{mesh, options, chart, {}, {}, {}, {}};
+    MergeState st{mesh, options, chart, {}, {}, {}, {}, {}};
     st.faces_of.resize(chart_count);
     st.area.assign(chart_count, 0);
     for (uint32_t f = 0; f < chart.size(); ++f) {
@@ -347,6 +352,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     // Each chart's own flattening and square; a chart that fails on its own (the builder
     // splits it) is left alone.
     st.live.resize(chart_count);
+    st.joined.assign(chart_count, 0);
     ParallelFor(0, int64_t(chart_count), [&](int64_t c) {
         st.live[size_t(c)] = st.TryUnion(st.faces_of[size_t(c)], {});
     });
@@ -361,20 +367,20 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
             break;
         ++report.rounds;
         report.tried += picked.size();
-        std::vector<Trial> united(picked.size());
+        std::vector<Trial> trials(picked.size());
         ParallelFor(0, int64_t(picked.size()), [&](int64_t i) {
             const Border& e = picked[size_t(i)];
-            united[size_t(i)] = st.TryUnion(st.faces_of[e.a], st.faces_of[e.b]);
+            trials[size_t(i)] = st.TryUnion(st.faces_of[e.a], st.faces_of[e.b]);
         });
         for (size_t i = 0; i < picked.size(); ++i) {
             const Border& e = picked[i];
-            const double sq = united[i].square;
+            const double sq = trials[i].square;
             const double parts = st.live[e.a].square + st.live[e.b].square;
             if (sq < 0 || sq > (1 + options.max_square_growth) * parts) {
                 st.rejected.insert({e.a, e.b});
                 continue;
             }
-            st.Join(e.a, e.b, std::move(united[i]));
+            st.Join(e.a, e.b, std::move(trials[i]));
             ++report.accepted;
         }
     }
@@ -386,6 +392,8 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
             remap[c] = next++;
             if (params)
                 params->push_back(std::move(st.live[c].param));
+            if (united)
+                united->push_back(st.joined[c]);
         }
         c = remap[c];
     }

@@ -69,9 +69,11 @@ struct MergeReport {
 // given and there were at least two charts, (*params)[c] receives final chart c's
 // ParameterizeChart(ExtractCharts(mesh, *chart_of)[c], options.param) (status kEmpty
 // where it was never computed: a chart over the vertex bound), so the caller need not
-// compute it again.
+// compute it again. If united is given, (*united)[c] is 1 where final chart c is a union
+// of two or more of the input charts, 0 where it is an input chart as it was.
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
                         std::vector<uint32_t>* chart_of,
-                        std::vector<ChartParam>* params = nullptr);
+                        std::vector<ChartParam>* params = nullptr,
+                        std::vector<uint8_t>* united = nullptr);
 
 }  // namespace mebake::stream

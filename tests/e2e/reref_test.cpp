@@ -1,6 +1,8 @@
 // tools/reref: a reference's points re-addressed to another ingest of the same scan (other
 // charts) must name the same surface points there: each point's triangle and barycentrics
-// in the other ingest's tile give back the position the reference recorded.
+// in the other ingest's tile give back the position the reference recorded. A point whose
+// shading normal there is not the one recorded (its B was integrated over another
+// hemisphere) is dropped and counted.
 #include "io/chunk_file.h"
 #include "run.h"
 
@@ -81,6 +83,25 @@ TEST(Reref, PointsLandOnTheSameSurfacePointsInAnotherIngest) {
         moved += after["points"][i]["chart"] != before["points"][i]["chart"] ||
                  after["points"][i]["triangle"] != before["points"][i]["triangle"];
     EXPECT_GT(moved, 0u);
+
+    // On its own ingest every point keeps its normal; one whose recorded normal is turned
+    // (as a chart border moved onto a crease would turn it) is dropped and counted.
+    nlohmann::json turned = ReadJson(dir / "ref.json");
+    const size_t n = turned["points"].size();
+    auto& q = turned["points"][n / 2];
+    const double nx = q["normal"][0], ny = q["normal"][1], nz = q["normal"][2];
+    q["normal"] = {nx + 0.2 * ny, ny - 0.2 * nx, nz};  // about 11 degrees about z, or less
+    q["normal"] = std::fabs(nz) > 0.98 ? nlohmann::json{nx + 0.2 * nz, ny, nz - 0.2 * nx} : q["normal"];
+    std::ofstream(dir / "ref_turned.json") << turned.dump();
+    const e2e::RunResult same = e2e::Capture(Q(reref) + " " + Q(dir / "ref.json") + " " +
+                                             Q(dir / "a.mebake") + " -o " + Q(dir / "ref_a.json") + " 2>&1");
+    ASSERT_EQ(same.code, 0) << same.out;
+    EXPECT_EQ(ReadJson(dir / "ref_a.json")["points"].size(), n) << same.out;
+    const e2e::RunResult one = e2e::Capture(Q(reref) + " " + Q(dir / "ref_turned.json") + " " +
+                                            Q(dir / "a.mebake") + " -o " + Q(dir / "ref_t.json") + " 2>&1");
+    ASSERT_EQ(one.code, 0) << one.out;
+    EXPECT_EQ(ReadJson(dir / "ref_t.json")["points"].size(), n - 1) << one.out;
+    EXPECT_NE(one.out.find("1 dropped for another shading normal"), std::string::npos) << one.out;
 
     // A directory that is not an ingest: non-zero exit, the path named.
     const e2e::RunResult bad = e2e::Capture(Q(reref) + " " + Q(dir / "ref.json") + " " +

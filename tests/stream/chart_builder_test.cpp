@@ -5,6 +5,7 @@
 #include "stream/bricks.h"
 #include "stream/chart_builder.h"
 #include "stream/spill.h"
+#include "stream/tile.h"
 
 #include <gtest/gtest.h>
 
@@ -70,6 +71,78 @@ TEST(ChartBuilder, BrickResultKeepsNoPerVertexData) {
     // in it would grow with the mesh (the cut flags did: 50 MB at 100M triangles).
     EXPECT_TRUE(r.repair.vertex_on_cut.empty());
     EXPECT_EQ(r.repair.vertex_on_cut.capacity(), 0u);
+    fs::remove_all(dir);
+}
+
+// Half a cylinder, radius 1 and length pi (n x n quads): the segmentation's 60-degree
+// normal cone cuts it into several charts, which merge (it is developable) into squares
+// of about pi a side.
+void WriteHalfCylinder(const std::string& path, int n) {
+    constexpr double kPi = 3.14159265358979323846;
+    std::ofstream out(path);
+    out << "ply\nformat ascii 1.0\nelement vertex " << (n + 1) * (n + 1)
+        << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << 2 * n * n
+        << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+            const double a = kPi * i / n;
+            out << std::cos(a) << ' ' << kPi * j / n << ' ' << std::sin(a) << '\n';
+        }
+    auto id = [n](int i, int j) { return j * (n + 1) + i; };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            out << "3 " << id(i, j) << ' ' << id(i + 1, j + 1) << ' ' << id(i + 1, j) << '\n';
+            out << "3 " << id(i, j) << ' ' << id(i, j + 1) << ' ' << id(i + 1, j + 1) << '\n';
+        }
+}
+
+// With merge_horizon_cells a union's geometry image follows its light-map texels up to
+// union_geometry_resolution (the other charts' cap, max_geometry_resolution, made a
+// merged 512-texel chart's geometry samples 4 texels wide: the turbine blade's thin edges
+// came out 45-74 % dark); a chart that is not a union keeps the common cap.
+TEST(ChartBuilder, AUnionsGeometryFollowsItsTexels) {
+    const fs::path dir =
+        fs::temp_directory_path() / ("mebake_union_geometry_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir / "tiles");
+    fs::create_directories(dir / "bricks");
+    const std::string ply = (dir / "cyl.ply").string();
+    WriteHalfCylinder(ply, 40);
+    SpillResult sr;
+    {
+        Spill spill(dir.string(), size_t(1) << 20);
+        auto in = io::InputStream::Open(ply);
+        io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
+        sr = spill.Finish();
+    }
+    ASSERT_EQ(BinFaces(dir.string(), sr, BinOptions{}).bricks.size(), 1u);
+
+    ChartBuildOptions o;
+    o.texel_size = 3.14159 / 200;  // a union of pi a side: 256 texels
+    o.max_geometry_resolution = 32;
+    o.union_geometry_resolution = 128;
+    auto charts = [&](bool horizon_cells, bool merge) {
+        o.merge_horizon_cells = horizon_cells;
+        o.merge_charts = merge;
+        const BrickResult r = BuildBrickCharts(dir.string(), 0, o);
+        std::vector<std::pair<uint32_t, uint32_t>> res;  // light map, geometry
+        for (size_t c = 0; c < r.charts.size(); ++c)
+            res.emplace_back(r.charts[c].resolution,
+                             ReadTile(r.tile_files[c], TileParts::GeometryImage).geometry.resolution);
+        return res;
+    };
+    const auto apart = charts(true, false);
+    ASSERT_GE(apart.size(), 2u);  // the normal cone cut it
+    for (const auto& [texels, geometry] : apart)
+        EXPECT_EQ(geometry, std::min(texels, 32u));
+    const auto merged = charts(true, true);
+    ASSERT_LT(merged.size(), apart.size());
+    uint32_t finest = 0;
+    for (const auto& [texels, geometry] : merged) {
+        EXPECT_EQ(geometry, std::min(texels, 128u)) << "a union's geometry follows its texels";
+        finest = std::max(finest, geometry);
+    }
+    EXPECT_GT(finest, 32u);
     fs::remove_all(dir);
 }
 
