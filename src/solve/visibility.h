@@ -46,8 +46,10 @@ struct PagingOptions;
 
 enum class BuildQuality { kLow, kMedium, kHigh };
 
-// How batches are traced. All give identical answers; they differ in speed (see
-// bench/embree_rate_bench.cpp for numbers on the target machine).
+// How batches are traced. They differ in speed (see bench/embree_rate_bench.cpp for
+// numbers on the target machine) and, on an AVX2-only machine, in a few answers: igea's
+// solve traced 31922526 rays by stream, 31922524 by packet8, 31911226 one by one
+// (bench/RESULTS.md, "Issue 13 (session 16)").
 enum class TraceMethod {
     kStream,    // rtcOccluded1M / rtcIntersect1M over chunks of the batch
     kPacket16,  // rtcOccluded16 / rtcIntersect16 (native on AVX-512)
@@ -56,7 +58,9 @@ enum class TraceMethod {
 };
 
 struct VisibilityOptions {
-    bool compact = true;  // RTC_SCENE_FLAG_COMPACT: smaller BVH, slightly slower traversal
+    // RTC_SCENE_FLAG_COMPACT: smaller BVH (igea: 116 against 151 B per triangle), slower
+    // traversal (igea's solve +14 % CPU); a few rays answer differently (solve_job.h).
+    bool compact = true;
     bool robust = true;   // RTC_SCENE_FLAG_ROBUST: watertight, no leaks through shared edges
     BuildQuality quality = BuildQuality::kMedium;
     TraceMethod method = TraceMethod::kStream;  // fastest for node-to-node bundles here

@@ -296,5 +296,29 @@ TEST(PagedVisibilityChoice, OnlyWhenTheSceneExceedsHalfTheEmbreeCap) {
     EXPECT_TRUE(VisibilityIsPaged(proxy, MemoryBudget(128 * MiB)));
 }
 
+// The full BVH (faster, ~30 % more Embree memory) only for scenes that fit the visibility
+// share at 3x the ingest's estimate, and the same choice at every budget from 256M up, so
+// that a bake's bytes do not follow --memory there.
+TEST(CompactBvhChoice, FullForTheSharedScansCompactForLargeOrPagedScenes) {
+    constexpr uint64_t MiB = uint64_t(1) << 20;
+    stream::Manifest igea;
+    igea.proxy_triangles = 268'686;  // the largest shared scan, full mesh
+    for (uint64_t budget : {256 * MiB, 1024 * MiB, 8192 * MiB})
+        EXPECT_FALSE(VisibilityIsCompact(igea, MemoryBudget(budget))) << budget;
+    stream::Manifest big;
+    big.proxy_triangles = 1'000'000;
+    for (uint64_t budget : {256 * MiB, 1024 * MiB, 8192 * MiB})
+        EXPECT_TRUE(VisibilityIsCompact(big, MemoryBudget(budget))) << budget;
+    stream::Manifest proxy;
+    proxy.proxy_triangles = 670'000;
+    proxy.proxy_cell_size = 0.01;
+    EXPECT_TRUE(VisibilityIsCompact(proxy, MemoryBudget(1024 * MiB)));
+    // Paged (under 256M): compact, as the pieces are sized.
+    stream::Manifest paged;
+    paged.proxy_triangles = 1'000'000;
+    ASSERT_TRUE(VisibilityIsPaged(paged, MemoryBudget(128 * MiB)));
+    EXPECT_TRUE(VisibilityIsCompact(paged, MemoryBudget(128 * MiB)));
+}
+
 }  // namespace
 }  // namespace mebake::solve
