@@ -207,6 +207,20 @@ TEST(DirectLight, VisibilityPointAboveTheSurfaceMovesOntoIt) {
     EXPECT_NEAR(light_at(0.2f), lit, 0.02 * lit);  // higher than the reach: over the wall
 }
 
+// A small square light (side 0.2, radiance 100) 10 away, `elevation` degrees above the
+// x-z plane toward +z (toward = 1) or -z (-1), facing the origin.
+PolygonLight FarSquareLight(double elevation, double toward) {
+    const double d = std::numbers::pi / 180;
+    const double up = std::sin(elevation * d), ahead = toward * std::cos(elevation * d);
+    const Vec3d c(0, 10 * up, 10 * ahead), a(1, 0, 0), b(0, ahead, -up);
+    const double h = 0.1;
+    PolygonLight light;
+    light.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
+    light.radiance = {100, 100, 100};
+    light.two_sided = true;
+    return light;
+}
+
 // A fold of large faces: the point's face is tilted 10 degrees from the smooth horizon the
 // caller gives, and a small light sits 5 degrees above that horizon but 5 below the face's
 // plane. The path tracer has it blocked by the surface itself (reference.cpp); the shadow
@@ -217,12 +231,8 @@ struct FoldScene {
     PolygonLight light;
     Vec3f face_normal;
     FoldScene() {
-        const double d = std::numbers::pi / 180, up = std::sin(5 * d), ahead = std::cos(5 * d);
-        const Vec3d c(0, 10 * up, 10 * ahead), a(1, 0, 0), b(0, ahead, -up);
-        const double h = 0.1;
-        light.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
-        light.radiance = {100, 100, 100};
-        light.two_sided = true;
+        const double d = std::numbers::pi / 180;
+        light = FarSquareLight(5, 1);
         scene.lights.push_back(light);
         // Face A: y = z tan(10 deg) up to the ridge at z = 0.005; face B falls away beyond
         // it; patch C lies flat, far to the side, and sees the light.
@@ -275,13 +285,7 @@ struct BendScene {
     VisibilityScene vis;
     PolygonLight light;
     BendScene(double ta, double tb, double elevation, double toward) {
-        const double d = std::numbers::pi / 180;
-        const double up = std::sin(elevation * d), ahead = toward * std::cos(elevation * d);
-        const Vec3d c(0, 10 * up, 10 * ahead), a(1, 0, 0), b(0, ahead, -up);
-        const double h = 0.1;
-        light.vertices = {c - a * h - b * h, c - a * h + b * h, c + a * h + b * h, c + a * h - b * h};
-        light.radiance = {100, 100, 100};
-        light.two_sided = true;
+        light = FarSquareLight(elevation, toward);
         scene.lights.push_back(light);
         const float fa = float(ta), fb = float(tb);
         std::vector<float> geo = {-1, -fa, -1, 1, -fa, -1, 1, 0, 0, -1, 0, 0,  // A
