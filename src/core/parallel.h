@@ -11,9 +11,11 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <utility>
+#include <vector>
 
 namespace mebake {
 
@@ -40,6 +42,16 @@ void ParallelFor(int64_t begin, int64_t end, Fn&& fn, int64_t grain = 1) {
                       [&](const tbb::blocked_range<int64_t>& r) {
                           for (int64_t i = r.begin(); i != r.end(); ++i) fn(i);
                       });
+}
+
+// Calls fn(order[k]) for every k, started in the order of k: each call takes the next entry
+// from a shared counter, whichever worker runs it, so jobs listed first start first (a
+// plain ParallelFor splits the range, and a long job at its end can run alone at the end).
+// Results must not depend on the order, as for ParallelFor.
+template <typename Fn>
+void ParallelForInOrder(const std::vector<uint32_t>& order, Fn&& fn) {
+    std::atomic<size_t> next{0};
+    ParallelFor(0, int64_t(order.size()), [&](int64_t) { fn(order[next.fetch_add(1)]); });
 }
 
 // Calls fn(lo, hi) on disjoint sub-ranges covering [begin, end).

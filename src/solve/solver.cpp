@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <queue>
 
 namespace mebake::solve {
@@ -112,6 +113,24 @@ size_t Solver::NodeBudget(const SolveChart& sc) const {
     const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
     const int extra = std::max(0, texel_level - kBudgetLevel);
     return opt_.max_nodes_per_chart << (2 * extra);
+}
+
+std::vector<uint32_t> Solver::LargestFirst() const {
+    // The direct pass's work grows with a chart's light-map texels (its node budget): charts
+    // with more texels start first, in chart order among equals, so that a large chart does
+    // not run alone at the end of the pass (igea's bake had one core idle ~2 s there; bench/
+    // RESULTS.md, issue 13 session 16). Among charts of one size the work varies ~20-fold
+    // with their light, which nothing cheap predicts. Each chart's result is independent of
+    // the order.
+    std::vector<uint32_t> order(charts_.size());
+    std::iota(order.begin(), order.end(), 0u);
+    auto texel_level = [&](uint32_t c) {
+        const SolveChart& sc = charts_[c];
+        return sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t a, uint32_t b) { return texel_level(a) > texel_level(b); });
+    return order;
 }
 
 int Solver::EmitterTop(const SolveChart& sc) const {
@@ -1126,10 +1145,10 @@ void Solver::Run(const Progress& progress) {
     if (next_batch_ < 0) {
         reference_ = ReferenceIrradiance();
         std::atomic<uint64_t> refined{0};
-        ParallelFor(0, nc, [&](int64_t c) {
+        ParallelForInOrder(LargestFirst(), [&](uint32_t c) {
             if (!stop_ || !stop_->load())
-                RefineDirect(uint32_t(c));
-            StoreField(uint32_t(c));
+                RefineDirect(c);
+            StoreField(c);
             if (progress)
                 progress({-1, ++refined, nc, 1, 0});
         });

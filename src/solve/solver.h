@@ -235,6 +235,8 @@ private:
     // The solver's scalar of a colour: the mean of its channels.
     static float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
     size_t NodeBudget(const SolveChart& sc) const;
+    // The charts in the direct pass's order: most light-map texels first (LargestFirst).
+    std::vector<uint32_t> LargestFirst() const;
     // The finest emitter sample level of a chart (SolverSettings::emitter_texels).
     int EmitterTop(const SolveChart& sc) const;
     // The receiver point at chart coordinates (u, v), sampled (smp) from geometry level
