@@ -328,8 +328,7 @@ void Solver::RefineDirect(uint32_t chart) {
     const int order = fields_[chart].order();
     // A node's polynomial holds (M+1)^2 values per block: a node narrower than M+1 texels
     // describes more than the light map can store, so refinement stops there.
-    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
-    const int max_level = std::max(0, texel_level - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
+    const int max_level = std::max(0, TexelLevel(sc) - (order >= 3 ? 2 : order >= 1 ? 1 : 0));
     // The lights' and the sky's rays start an eighth of a light-map texel off the surface
     // (never closer than the proxy allows), from visibility points moved onto the real
     // surface first (DirectLight::OnSurface, up to four texels under it). With rays leaving

@@ -110,8 +110,7 @@ size_t Solver::NodeBudget(const SolveChart& sc) const {
     // The budget follows the chart's light-map texels: at 8192 nodes whatever the size, the
     // bunny's merged 512-texel charts stopped refining with their shadows half fitted
     // (bench/RESULTS.md, "Issue 13 (session 8)").
-    const int texel_level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
-    const int extra = std::max(0, texel_level - kBudgetLevel);
+    const int extra = std::max(0, TexelLevel(sc) - kBudgetLevel);
     return opt_.max_nodes_per_chart << (2 * extra);
 }
 
@@ -124,12 +123,9 @@ std::vector<uint32_t> Solver::LargestFirst() const {
     // the order.
     std::vector<uint32_t> order(charts_.size());
     std::iota(order.begin(), order.end(), 0u);
-    auto texel_level = [&](uint32_t c) {
-        const SolveChart& sc = charts_[c];
-        return sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
-    };
-    std::stable_sort(order.begin(), order.end(),
-                     [&](uint32_t a, uint32_t b) { return texel_level(a) > texel_level(b); });
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        return TexelLevel(charts_[a]) > TexelLevel(charts_[b]);
+    });
     return order;
 }
 
@@ -137,8 +133,8 @@ int Solver::EmitterTop(const SolveChart& sc) const {
     const int finest = sc.geometry.finest_level();
     int top = opt_.max_emitter_level;
     if (opt_.settings.emitter_texels > 0) {
-        const int texel_level = sc.max_level >= 0 ? sc.max_level : finest;
-        top = std::max(top, texel_level - std::countr_zero(unsigned(opt_.settings.emitter_texels)));
+        const int span = std::countr_zero(unsigned(opt_.settings.emitter_texels));
+        top = std::max(top, TexelLevel(sc) - span);
     }
     return std::min(finest, top);
 }
@@ -164,8 +160,7 @@ float Solver::RayOffset(uint32_t chart) const {
     // than a texel cannot be represented by the light map (that detail comes back through
     // the full-resolution normal at display), and chasing them would refine every node.
     const SolveChart& sc = charts_[chart];
-    const int level = sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
-    return std::max(opt_.ray_offset, float(0.5 * sc.scale / double(1u << level)));
+    return std::max(opt_.ray_offset, float(0.5 * sc.scale / double(1u << TexelLevel(sc))));
 }
 
 Vec3f Solver::Albedo(uint32_t material, const Vec3f& color) const {

@@ -234,6 +234,11 @@ private:
                            float* radius);
     // The solver's scalar of a colour: the mean of its channels.
     static float Luminance(const Vec3f& c) { return (c.x + c.y + c.z) / 3; }
+    // The level of a chart's light-map texels in its quadtree (max_level; unset: the
+    // finest geometry level).
+    static int TexelLevel(const SolveChart& sc) {
+        return sc.max_level >= 0 ? sc.max_level : sc.geometry.finest_level();
+    }
     size_t NodeBudget(const SolveChart& sc) const;
     // The charts in the direct pass's order: most light-map texels first (LargestFirst).
     std::vector<uint32_t> LargestFirst() const;
