@@ -136,6 +136,11 @@ bool Overlaps(const Tri2& t, const Box& b) {
     return true;
 }
 
+Box BoxOf(const Tri2& t) {
+    return {Vec2d(std::min({t.p[0].x, t.p[1].x, t.p[2].x}), std::min({t.p[0].y, t.p[1].y, t.p[2].y})),
+            Vec2d(std::max({t.p[0].x, t.p[1].x, t.p[2].x}), std::max({t.p[0].y, t.p[1].y, t.p[2].y}))};
+}
+
 // Whether a triangle lies within sqrt(r2) of a box. Their distance is 0 if they overlap,
 // else the least of the triangle's vertices' distances to the box and the box's corners'
 // distances to the triangle, so any one of those within r2 decides: the cheap ones are
@@ -315,10 +320,16 @@ bool LocateInside(const ChartGrid& g, const Vec2d& u, size_t cell, LocateResult*
         return true;
     }
     // Within float resolution of a triangle (e.g. a rounded point of a boundary edge):
-    // real, at the closest point.
+    // real, at the closest point. No triangle here contains u (the same barycentric test
+    // just failed), so its closest point is on its edges, as ClosestPoint would find; those
+    // lie in the triangle's box up to rounding (~1e-16), so a box over twice the distance
+    // away cannot hold one (most of a virtual texel's cell: skipped at a box test's cost).
     double best2 = kInsideDistance * kInsideDistance;
     for (uint32_t i = g.cell_start[cell]; i < g.cell_start[cell + 1]; ++i) {
-        const Closest c = ClosestPoint(TriangleAt(g, g.cell_tris[i]), u);
+        const Tri2 t = TriangleAt(g, g.cell_tris[i]);
+        if (PointBoxDist2(u, BoxOf(t)) > 4 * kInsideDistance * kInsideDistance)
+            continue;
+        const Closest c = ClosestOnEdges(t, u);
         if (c.dist2 <= best2 && (!r.real || c.dist2 < best2)) {
             best2 = c.dist2;
             r.triangle = g.cell_tris[i];

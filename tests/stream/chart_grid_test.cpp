@@ -374,5 +374,27 @@ TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
     EXPECT_EQ(ChartGrid{}.InsideTriangle(Vec2f(0.5f, 0.5f)), kNoTriangle);
 }
 
+TEST(ChartGrid, PointsJustOutsideAnEdgeAreRealWithinTheTolerance) {
+    // A square of two triangles with its right edge on x = 0.75: points k * 2^-24 (a float
+    // ulp there) to its right are real (on the edge) up to the 2^-22 tolerance, k <= 4,
+    // and virtual beyond, whichever cell holds them (grids of 1 to 64 cells a side).
+    const std::vector<Vec2f> uv = {{0.25f, 0.25f}, {0.75f, 0.25f}, {0.75f, 0.75f}, {0.25f, 0.75f}};
+    const Tris tris = {{0, 1, 2}, {0, 2, 3}};
+    for (int res : {1, 3, 8, 64}) {
+        const ChartGrid grid = BuildChartGrid(uv, tris, res);
+        for (float y : {0.3f, 0.5f, 0.7f}) {
+            for (int k = 1; k <= 12; ++k) {
+                const Vec2f q(0.75f + float(k) * 0x1p-24f, y);
+                const GridLocation loc = grid.Locate(q);
+                EXPECT_EQ(loc.real, k <= 4) << res << " " << y << " " << k;
+                EXPECT_EQ(grid.InsideTriangle(q), k <= 4 ? 0u : kNoTriangle) << res << " " << k;
+                EXPECT_EQ(loc.triangle, 0u);
+                if (!loc.real)
+                    EXPECT_NEAR(loc.distance, float(k) * 0x1p-24f, 1e-9f);
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace mebake::stream
