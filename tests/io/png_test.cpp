@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <unistd.h>
+#include <zlib.h>
 
 namespace mebake::io {
 namespace {
@@ -33,6 +34,29 @@ TEST(Png, RoundTripRgbInBands) {
     EXPECT_EQ(img.channels, 3);
     EXPECT_TRUE(img.srgb);
     EXPECT_EQ(img.pixels, px);
+}
+
+// The encoding is a setting (bench/RESULTS.md, issue 13, h-exp2): every row Paeth-filtered,
+// and the pixels decode unchanged.
+TEST(Png, RowsArePaethFiltered) {
+    const int w = 23, h = 9;
+    const auto px = Pattern(w, h, 3);
+    const std::vector<uint8_t> png = EncodePng(w, h, 3, px);
+    std::vector<uint8_t> idat;
+    for (size_t at = 8; at + 12 <= png.size();) {  // chunks: length, type, data, crc
+        const size_t n = size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 |
+                         size_t(png[at + 2]) << 8 | png[at + 3];
+        if (std::string(png.begin() + long(at) + 4, png.begin() + long(at) + 8) == "IDAT")
+            idat.insert(idat.end(), png.begin() + long(at) + 8, png.begin() + long(at + 8 + n));
+        at += 12 + n;
+    }
+    std::vector<uint8_t> rows(size_t(h) * (1 + size_t(w) * 3));
+    uLongf len = rows.size();
+    ASSERT_EQ(uncompress(rows.data(), &len, idat.data(), idat.size()), Z_OK);
+    ASSERT_EQ(len, rows.size());
+    for (int y = 0; y < h; ++y)
+        EXPECT_EQ(rows[size_t(y) * (1 + size_t(w) * 3)], 4) << "row " << y;  // 4: Paeth
+    EXPECT_EQ(DecodePng(png).pixels, px);
 }
 
 TEST(Png, RgbaToAFile) {
