@@ -389,8 +389,9 @@ TEST(ChartGrid, PointsJustOutsideAnEdgeAreRealWithinTheTolerance) {
                 EXPECT_EQ(loc.real, k <= 4) << res << " " << y << " " << k;
                 EXPECT_EQ(grid.InsideTriangle(q), k <= 4 ? 0u : kNoTriangle) << res << " " << k;
                 EXPECT_EQ(loc.triangle, 0u);
-                if (!loc.real)
+                if (!loc.real) {
                     EXPECT_NEAR(loc.distance, float(k) * 0x1p-24f, 1e-9f);
+                }
             }
         }
     }
