@@ -817,8 +817,10 @@ TEST(Solver, NarrowGrooveConvergesPastTheGlobalStop) {
         << batches_all << ")";
 }
 
-TEST(Solver, BitIdenticalForAnyThreadCount) {
-    auto run = [](int threads) {
+// split: SolverSettings::near_emitter_split, on 64-texel charts (finer than their 32 x 32
+// emitter samples, so the samples have children).
+void CheckBitIdenticalForAnyThreadCount(double split) {
+    auto run = [split](int threads) {
         ThreadLimit limit(threads);
         TestScene ts;
         ts.scene.per_input = {{Mat(0.6f)}};
@@ -827,10 +829,11 @@ TEST(Solver, BitIdenticalForAnyThreadCount) {
         light.radiance = {5, 4, 3};
         ts.scene.lights.push_back(light);
         for (const auto& f : CubeInterior())
-            ts.Add(MakePatch(f, 16, 0, 1));
+            ts.Add(MakePatch(f, split > 0 ? 64 : 16, 0, 1));
         ts.vis.Commit();
         SolveOptions opt;
         opt.settings.max_bounces = 4;
+        opt.settings.near_emitter_split = split;
         opt.emitter_group = 4;  // two groups of shooters per batch
         Solver solver(ts.scene, ts.charts, ts.vis, opt);
         solver.Run();
@@ -842,6 +845,12 @@ TEST(Solver, BitIdenticalForAnyThreadCount) {
     auto one = run(1), two = run(2);
     ASSERT_EQ(one.size(), two.size());
     EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
+}
+
+TEST(Solver, BitIdenticalForAnyThreadCount) { CheckBitIdenticalForAnyThreadCount(0); }
+
+TEST(Solver, BitIdenticalForAnyThreadCountWithNearEmitterSplit) {
+    CheckBitIdenticalForAnyThreadCount(2);
 }
 
 }  // namespace
