@@ -212,33 +212,45 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     e->scale = sc.scale;
     e->levels.assign(size_t(top) + 1, {});
     const uint32_t n = 1u << top;
-    auto& lv = e->levels[size_t(top)];
-    lv.resize(size_t(n) * n);
-    float val[9];
-    for (uint32_t j = 0; j < n; ++j) {
-        for (uint32_t i = 0; i < n; ++i) {
-            const auto& g = sc.geometry.At(top, i, j);
-            Emitter::Texel& t = lv[size_t(j) * n + i];
-            t.pos = g.position;
-            t.nrm = g.normal;
-            t.vis = g.vis_point;
-            t.area = g.area;
-            t.radius = g.radius;
-            t.hull = g.position;
-            t.hull_radius = g.radius;
-            if (g.area <= 0)
-                continue;
-            TexelMean(field, true, i, j, n, val);
-            const Material& m = scene_.MaterialOf(g.material);
-            t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                  opt_.settings.radiosity);
-            // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-            if (first_shot && emissive_[chart])
-                for (int c = 0; c < 3; ++c)
-                    t.db[c] += float(std::numbers::pi) * m.emission[c];
-            t.db_max = Luminance(t.db);
+    // One level of finest samples from the geometry at level l: each texel's mean unshot
+    // radiosity (and emission on the first shot), and its relief over its children.
+    auto sample_level = [&](int l, std::vector<Emitter::Texel>* out) {
+        const uint32_t m = 1u << l;
+        out->resize(size_t(m) * m);
+        float val[9];
+        for (uint32_t j = 0; j < m; ++j) {
+            for (uint32_t i = 0; i < m; ++i) {
+                const auto& g = sc.geometry.At(l, i, j);
+                Emitter::Texel& t = (*out)[size_t(j) * m + i];
+                t.pos = g.position;
+                t.nrm = g.normal;
+                t.vis = g.vis_point;
+                t.area = g.area;
+                t.radius = g.radius;
+                t.hull = g.position;
+                t.hull_radius = g.radius;
+                for (uint32_t c = 0; l < sc.geometry.finest_level() && c < 4; ++c) {
+                    const auto& k = sc.geometry.At(l + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
+                    if (k.area > 0)
+                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, k.position,
+                                                               k.normal, k.radius, 0.f));
+                }
+                if (g.area <= 0)
+                    continue;
+                TexelMean(field, true, i, j, m, val);
+                const Material& mat = scene_.MaterialOf(g.material);
+                t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
+                                      opt_.settings.radiosity);
+                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+                if (first_shot && emissive_[chart])
+                    for (int c = 0; c < 3; ++c)
+                        t.db[c] += float(std::numbers::pi) * mat.emission[c];
+                t.db_max = Luminance(t.db);
+            }
         }
-    }
+    };
+    auto& lv = e->levels[size_t(top)];
+    sample_level(top, &lv);
     if (top < sc.geometry.finest_level()) {
         e->facets.resize(size_t(n) * n * 4);
         for (uint32_t j = 0; j < n; ++j)
@@ -247,46 +259,12 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     const auto& g = sc.geometry.At(top + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
-                    Emitter::Texel& t = lv[size_t(j) * n + i];
-                    if (g.area > 0)
-                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, g.position,
-                                                               g.normal, g.radius, 0.f));
                 }
     }
     // The finest samples' children, for the near pairs (CollectPairs): the same as a
     // finest sample one level down, each with its own unshot radiosity.
-    if (opt_.settings.near_emitter_split > 0 && top < sc.geometry.finest_level()) {
-        const int nl = top + 1;
-        const uint32_t nn = 1u << nl;
-        e->near.resize(size_t(nn) * nn);
-        for (uint32_t j = 0; j < nn; ++j) {
-            for (uint32_t i = 0; i < nn; ++i) {
-                const auto& g = sc.geometry.At(nl, i, j);
-                Emitter::Texel& t = e->near[size_t(j) * nn + i];
-                t.pos = g.position;
-                t.nrm = g.normal;
-                t.vis = g.vis_point;
-                t.area = g.area;
-                t.radius = g.radius;
-                if (g.area <= 0)
-                    continue;
-                TexelMean(field, true, i, j, nn, val);
-                const Material& m = scene_.MaterialOf(g.material);
-                t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                      opt_.settings.radiosity);
-                if (first_shot && emissive_[chart])
-                    for (int c = 0; c < 3; ++c)
-                        t.db[c] += float(std::numbers::pi) * m.emission[c];
-                t.db_max = Luminance(t.db);
-                for (uint32_t c = 0; nl < sc.geometry.finest_level() && c < 4; ++c) {
-                    const auto& k = sc.geometry.At(nl + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
-                    if (k.area > 0)
-                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, k.position,
-                                                               k.normal, k.radius, 0.f));
-                }
-            }
-        }
-    }
+    if (opt_.settings.near_emitter_split > 0 && top < sc.geometry.finest_level())
+        sample_level(top + 1, &e->near);
     // Coarser samples: area-weighted means.
     for (int l = top - 1; l >= 0; --l) {
         const auto& fine = e->levels[size_t(l) + 1];
