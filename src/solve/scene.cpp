@@ -163,6 +163,9 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     if (o->emitter_texels < 0 || o->emitter_texels > 64 ||
         (o->emitter_texels & (o->emitter_texels - 1)) != 0)
         InputError({scene_file}, "solver.emitter_texels must be 0 or a power of two up to 64");
+    o->near_emitter_split = s.value("near_emitter_split", o->near_emitter_split);
+    if (!(o->near_emitter_split >= 0))
+        InputError({scene_file}, "solver.near_emitter_split must be >= 0");
     o->sky_deep_floor = s.value("sky_deep_floor", o->sky_deep_floor);
     o->outline_face_inside = s.value("outline_face_inside", o->outline_face_inside);
     if (!(o->sky_deep_floor >= 0))

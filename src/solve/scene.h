@@ -70,6 +70,11 @@ struct SolverSettings {
     // side on charts larger than 32 x 32 of them (a power of two; 0: 32 x 32 per chart
     // whatever its size).
     int emitter_texels = 0;
+    // A receiver point closer than near_emitter_split x the width of its finest emitter
+    // sample takes that sample's four children (one level finer, their own radiosity and
+    // rays) instead of the sample (Solver::Gatherer::CollectPairs); 0: off. 2 is where the
+    // transfer kernel's near form starts (its point form's error ~ (width / distance)^2).
+    double near_emitter_split = 2;
     // Opt-in: nodes two or more levels below the sky's gathering level split only where they
     // miss by more than sky_deep_floor shares, doubled per level deeper (0: sky_fit_floor).
     double sky_deep_floor = 0;

@@ -212,33 +212,45 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     e->scale = sc.scale;
     e->levels.assign(size_t(top) + 1, {});
     const uint32_t n = 1u << top;
-    auto& lv = e->levels[size_t(top)];
-    lv.resize(size_t(n) * n);
-    float val[9];
-    for (uint32_t j = 0; j < n; ++j) {
-        for (uint32_t i = 0; i < n; ++i) {
-            const auto& g = sc.geometry.At(top, i, j);
-            Emitter::Texel& t = lv[size_t(j) * n + i];
-            t.pos = g.position;
-            t.nrm = g.normal;
-            t.vis = g.vis_point;
-            t.area = g.area;
-            t.radius = g.radius;
-            t.hull = g.position;
-            t.hull_radius = g.radius;
-            if (g.area <= 0)
-                continue;
-            TexelMean(field, true, i, j, n, val);
-            const Material& m = scene_.MaterialOf(g.material);
-            t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                  opt_.settings.radiosity);
-            // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-            if (first_shot && emissive_[chart])
-                for (int c = 0; c < 3; ++c)
-                    t.db[c] += float(std::numbers::pi) * m.emission[c];
-            t.db_max = Luminance(t.db);
+    // One level of finest samples from the geometry at level l: each texel's mean unshot
+    // radiosity (and emission on the first shot), and its relief over its children.
+    auto sample_level = [&](int l, std::vector<Emitter::Texel>* out) {
+        const uint32_t m = 1u << l;
+        out->resize(size_t(m) * m);
+        float val[9];
+        for (uint32_t j = 0; j < m; ++j) {
+            for (uint32_t i = 0; i < m; ++i) {
+                const auto& g = sc.geometry.At(l, i, j);
+                Emitter::Texel& t = (*out)[size_t(j) * m + i];
+                t.pos = g.position;
+                t.nrm = g.normal;
+                t.vis = g.vis_point;
+                t.area = g.area;
+                t.radius = g.radius;
+                t.hull = g.position;
+                t.hull_radius = g.radius;
+                for (uint32_t c = 0; l < sc.geometry.finest_level() && c < 4; ++c) {
+                    const auto& k = sc.geometry.At(l + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
+                    if (k.area > 0)
+                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, k.position,
+                                                               k.normal, k.radius, 0.f));
+                }
+                if (g.area <= 0)
+                    continue;
+                TexelMean(field, true, i, j, m, val);
+                const Material& mat = scene_.MaterialOf(g.material);
+                t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
+                                      opt_.settings.radiosity);
+                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+                if (first_shot && emissive_[chart])
+                    for (int c = 0; c < 3; ++c)
+                        t.db[c] += float(std::numbers::pi) * mat.emission[c];
+                t.db_max = Luminance(t.db);
+            }
         }
-    }
+    };
+    auto& lv = e->levels[size_t(top)];
+    sample_level(top, &lv);
     if (top < sc.geometry.finest_level()) {
         e->facets.resize(size_t(n) * n * 4);
         for (uint32_t j = 0; j < n; ++j)
@@ -247,12 +259,12 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                     const auto& g = sc.geometry.At(top + 1, 2 * i + (c & 1), 2 * j + (c >> 1));
                     e->facets[(size_t(j) * n + i) * 4 + c] = {g.position, g.normal, g.vis_point,
                                                                g.area};
-                    Emitter::Texel& t = lv[size_t(j) * n + i];
-                    if (g.area > 0)
-                        t.relief = std::max(t.relief, ReliefOf(t.vis, t.nrm, g.position,
-                                                               g.normal, g.radius, 0.f));
                 }
     }
+    // The finest samples' children, for the near pairs (CollectPairs): the same as a
+    // finest sample one level down, each with its own unshot radiosity.
+    if (opt_.settings.near_emitter_split > 0 && top < sc.geometry.finest_level())
+        sample_level(top + 1, &e->near);
     // Coarser samples: area-weighted means.
     for (int l = top - 1; l >= 0; --l) {
         const auto& fine = e->levels[size_t(l) + 1];
@@ -507,12 +519,14 @@ private:
     };
     struct Pair {
         uint32_t point;
-        uint32_t texel;
+        uint32_t texel;  // kNearTexel set: Emitter::near[texel & ~kNearTexel]
         Vec3f contribution;  // E per unit radiosity of the texel
     };
+    static constexpr uint32_t kNearTexel = 1u << 31;
     struct Deferred {  // a link made, not yet summed (EvaluateLink, Resolve)
         uint32_t node, points;  // receiver node, its first point in set_pts_ (ng^2 of them)
         const std::vector<Emitter::Texel>* texels;  // the emitter level sampled
+        const std::vector<Emitter::Texel>* near;    // Emitter::near
         float vis;                                   // < 0: one ray per pair
         size_t pair0, pair1;                         // its pairs_
         size_t seg0;  // its first segment in batch_ (vis < 0: one per pair)
@@ -585,7 +599,8 @@ private:
     // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
-        Deferred d{uint32_t(n), 0, &em.levels[size_t(ls)], vis, pairs_.size(), 0, batch_.size()};
+        Deferred d{uint32_t(n), 0, &em.levels[size_t(ls)], &em.near, vis, pairs_.size(), 0,
+                   batch_.size()};
         CollectPairs(em, lk, ls, vis < 0);
         d.pair1 = pairs_.size();
         if (d.pair1 == d.pair0)
@@ -692,7 +707,8 @@ private:
             if (d.vis < 0 && batch_.occluded[d.seg0 + (q - d.pair0)])
                 continue;
             const Pair& pr = pairs_[q];
-            const Vec3f& tdb = (*d.texels)[pr.texel].db;
+            const Vec3f& tdb = pr.texel & kNearTexel ? (*d.near)[pr.texel & ~kNearTexel].db
+                                                     : (*d.texels)[pr.texel].db;
             const Vec3f db = d.vis < 0 ? tdb : tdb * d.vis;
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k)
@@ -899,6 +915,9 @@ private:
         // level).
         const bool cull = span > 1;
         const RegionBound region = cull ? PairRegion(em, lk, ls, faceted) : RegionBound{};
+        // Near pairs of the finest samples take their children (NearPairs).
+        const bool near = ls == top && !em.near.empty();
+        const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * texel_side, 2);
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
             if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
@@ -913,6 +932,10 @@ private:
                         continue;
                     const TexelSource src{t.pos, t.nrm, t.area};
                     const PairGeometry g = GeometryOf(rp.position, src);
+                    if (near && g.r2 < near_r2) {
+                        NearPairs(em, p, i, j, row, texel_side, org, rays);
+                        continue;
+                    }
                     Vec3d contrib;
                     int carrier = -1;
                     if (!faceted || FacetsAgree(g, t.spread)) {
@@ -940,6 +963,32 @@ private:
                                                  {t.vis, t.nrm, 0.5f * t.radius, t.relief});
                 }
             }
+        }
+    }
+
+    // Hierarchical radiosity's refinement of the emitter side alone, for a receiver point p
+    // near finest sample (i, j) of a row of `row`: the sample's four children
+    // (Emitter::near), each with its own radiosity, transfer and ray, in its place. The
+    // point-to-sample transfer errs by ~ (width / distance)^2 (the texel's solid angle
+    // against its point form; the near form's square fixes the shape, not the radiosity or
+    // the relief varying across it), and a slot's walls trade their light at that range.
+    void NearPairs(const Emitter& em, uint32_t p, uint32_t i, uint32_t j, uint32_t row,
+                   double texel_side, const Vec3f& org, bool rays) {
+        const ReceiverPoint& rp = pts_[p];
+        const uint32_t nrow = 2 * row;
+        for (uint32_t c = 0; c < 4; ++c) {
+            const uint32_t k = (2 * j + (c >> 1)) * nrow + 2 * i + (c & 1);
+            const auto& t = em.near[k];
+            if (t.area <= 0 || t.db_max <= 0)
+                continue;
+            Vec3d contrib;
+            if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area}, 0.5 * texel_side,
+                               &contrib))
+                continue;
+            pairs_.push_back({p, k | kNearTexel, Vec3f(contrib)});
+            if (rays)
+                batch_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
+                                         {t.vis, t.nrm, t.radius, t.relief});
         }
     }
 

@@ -111,6 +111,63 @@ TEST(Solver, ParallelUnitSquaresFormFactor) {
     EXPECT_NEAR(f, 0.19982, 0.01 * 0.19982);
 }
 
+// The form factor between two directly opposed unit squares at distance c (X = Y = 1 / c).
+double OpposedSquaresFormFactor(double c) {
+    const double x = 1 / c, q = std::sqrt(1 + x * x);
+    return 2 / (std::numbers::pi * x * x) *
+           (0.5 * std::log((1 + x * x) * (1 + x * x) / (1 + 2 * x * x)) +
+            2 * x * q * std::atan(x / q) - 2 * x * std::atan(x));
+}
+
+// Two facing unit plates one emitter sample width apart (1/32: 128-texel charts, 32 x 32
+// samples), the upper one emitting radiosity 1: the receiver's mean irradiance (the form
+// factor) and its RMS error against the exact irradiance at 400 points, with the near
+// pairs split (SolverSettings::near_emitter_split) or not.
+void NearPlates(double split, double* form_factor, double* rms) {
+    const double c = 1.0 / 32;
+    TestScene ts;
+    ts.scene.per_input = {{Mat(0.0f, float(1 / std::numbers::pi))}, {Mat(0.0f)}};
+    ts.Add(MakePatch([&](double u, double v) { return Vec3d(u, c, v); }, 128, 0 << 16, 1));
+    ts.Add(MakePatch([](double u, double v) { return Vec3d(u, 0, 1 - v); }, 128, 1 << 16, 1));
+    ts.vis.Commit();
+    SolveOptions opt;
+    opt.settings.max_bounces = 1;
+    opt.settings.near_emitter_split = split;
+    Solver solver(ts.scene, ts.charts, ts.vis, opt);
+    solver.Run();
+    const std::vector<Vec3d> emitter = {{0, c, 0}, {1, c, 0}, {1, c, 1}, {0, c, 1}};
+    double sum = 0, err2 = 0, ref2 = 0;
+    const int n = 20;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double u = (i + 0.5) / n, v = (j + 0.5) / n;
+            const double got = Irradiance(solver, 1, u, v, Vec3d(0, 1, 0));
+            const double exact = IrradianceClipped(emitter, 1 / std::numbers::pi,
+                                                   Vec3d(u, 0, 1 - v), Vec3d(0, 1, 0));
+            sum += got;
+            err2 += (got - exact) * (got - exact);
+            ref2 += exact * exact;
+        }
+    *form_factor = sum / (n * n);
+    *rms = std::sqrt(err2 / ref2);
+}
+
+TEST(Solver, NearEmitterSplitApproachesTheClosedForm) {
+    ASSERT_NEAR(OpposedSquaresFormFactor(1), 0.19982, 1e-5);
+    const double exact = OpposedSquaresFormFactor(1.0 / 32);
+    double f_off, rms_off, f_on, rms_on;
+    NearPlates(0, &f_off, &rms_off);
+    NearPlates(2, &f_on, &rms_on);
+    std::printf("form factor %.5f exact, %.5f unsplit, %.5f split; RMS %.4f / %.4f\n", exact,
+                f_off, f_on, rms_off, rms_on);
+    // Measured: the unsplit pairs 0.41 % low (their far form from 2 sample widths on), the
+    // split ones 0.04 %; pointwise 2.3 -> 2.2 % RMS (the plates' edges, where E halves
+    // within a texel, dominate it).
+    EXPECT_NEAR(f_on, exact, 0.002 * exact);
+    EXPECT_LT(std::abs(f_on - exact), 0.5 * std::abs(f_off - exact));
+    EXPECT_LT(rms_on, rms_off);
+}
+
 // The six faces of a cube mapped onto a sphere of radius r, wound so normals face inward.
 std::vector<Surface> SphereInterior(double r) {
     std::vector<Surface> faces;
@@ -760,8 +817,10 @@ TEST(Solver, NarrowGrooveConvergesPastTheGlobalStop) {
         << batches_all << ")";
 }
 
-TEST(Solver, BitIdenticalForAnyThreadCount) {
-    auto run = [](int threads) {
+// split: SolverSettings::near_emitter_split, on 64-texel charts (finer than their 32 x 32
+// emitter samples, so the samples have children).
+void CheckBitIdenticalForAnyThreadCount(double split) {
+    auto run = [split](int threads) {
         ThreadLimit limit(threads);
         TestScene ts;
         ts.scene.per_input = {{Mat(0.6f)}};
@@ -770,10 +829,11 @@ TEST(Solver, BitIdenticalForAnyThreadCount) {
         light.radiance = {5, 4, 3};
         ts.scene.lights.push_back(light);
         for (const auto& f : CubeInterior())
-            ts.Add(MakePatch(f, 16, 0, 1));
+            ts.Add(MakePatch(f, split > 0 ? 64 : 16, 0, 1));
         ts.vis.Commit();
         SolveOptions opt;
         opt.settings.max_bounces = 4;
+        opt.settings.near_emitter_split = split;
         opt.emitter_group = 4;  // two groups of shooters per batch
         Solver solver(ts.scene, ts.charts, ts.vis, opt);
         solver.Run();
@@ -785,6 +845,12 @@ TEST(Solver, BitIdenticalForAnyThreadCount) {
     auto one = run(1), two = run(2);
     ASSERT_EQ(one.size(), two.size());
     EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
+}
+
+TEST(Solver, BitIdenticalForAnyThreadCount) { CheckBitIdenticalForAnyThreadCount(0); }
+
+TEST(Solver, BitIdenticalForAnyThreadCountWithNearEmitterSplit) {
+    CheckBitIdenticalForAnyThreadCount(2);
 }
 
 }  // namespace
