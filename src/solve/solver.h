@@ -179,9 +179,9 @@ private:
             float area = 0;
         };
         std::vector<Facet> facets;
-        // The finest samples' children (SolverSettings::near_emitter_split), row of 2^(top+1):
-        // pos, nrm, vis, area, radius, db, db_max and relief; empty when off or when the
-        // finest samples are the finest geometry.
+        // The finest samples' children (SolverSettings::near_emitter_split), row of 2^(top+1),
+        // built as the finest samples are (BuildEmitter's sample_level; no cone or spread);
+        // empty when off or when the finest samples are the finest geometry.
         std::vector<Texel> near;
         // The four facets of sample (i, j) of level l, in quadrant order: its children at
         // level l + 1, or at the finest level `facets` (which must not be empty there).
