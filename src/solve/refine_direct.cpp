@@ -48,8 +48,8 @@ constexpr int kEdgeGrid = 16;
 // texels could hold the step. Such nodes are split this many levels below the cap.
 constexpr int kEdgeLevelsBelowCap = 1;
 
-// The depth below sky_level the default sky is tested to (SolverSettings::sky_extra_levels'
-// default): nodes deeper than that are GatherSky's deep levels (sky_deep_floor).
+// The depth below sky_level the sky was tested to before the deeper sky became the default
+// (session 18): nodes deeper than that are GatherSky's deep levels (sky_deep_floor).
 constexpr int kSkyDefaultDepth = 2;
 
 // The direct light's ray offset, in units of Solver::RayOffset (half a light-map texel).

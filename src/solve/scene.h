@@ -63,9 +63,9 @@ struct SolverSettings {
     // The sky's refinement below its gathering level (Solver::GatherSky): at most this many
     // levels deeper, and only where its fit misses by more than sky_fit_floor sky
     // directions' shares of E as well as by the tolerance (0: the tolerance alone).
-    // Opt-in deeper sky: 4 and 4 (docs/method.md, "Sky").
-    int sky_extra_levels = 2;
-    double sky_fit_floor = 0;
+    // 4 and 4 since session 18 (before: 2 and 0; docs/method.md, "Sky").
+    int sky_extra_levels = 4;
+    double sky_fit_floor = 4;
     // The finest emitter samples (Solver::EmitterTop): at most this many light-map texels a
     // side on charts larger than 32 x 32 of them (a power of two; 0: 32 x 32 per chart
     // whatever its size).

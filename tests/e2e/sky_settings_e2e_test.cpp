@@ -1,8 +1,9 @@
 // The sky's opt-in deeper refinement through the real binary (scene file "solver":
 // sky_extra_levels, sky_fit_floor; docs/scene-format.md): a bad value is an input error
-// naming the file and the key; the opt-in reaches the solver (the sample rock under the
-// default rig refines its sky differently: other leaves, other sky rays) and writes the
-// same solution bytes for --threads 1 and 2.
+// naming the file and the key; the settings reach the solver (the sample rock under the
+// default rig refines its sky differently with the shallower sky of sessions 1-17: other
+// leaves, other sky rays) and the default deeper sky writes the same solution bytes for
+// --threads 1 and 2.
 #include "run.h"
 
 #include <gtest/gtest.h>
@@ -30,7 +31,8 @@ TEST(SkySettingsE2e, BadValuesAreClearErrorsAndTheOptInIsDeterministic) {
     std::ofstream(bad) << R"({"default_rig": true, "solver": {"sky_extra_levels": 12}})";
     std::ofstream(deep)
         << R"({"default_rig": true, "solver": {"sky_extra_levels": 4, "sky_fit_floor": 4}})";
-    std::ofstream(plain) << R"({"default_rig": true})";
+    std::ofstream(plain)
+        << R"({"default_rig": true, "solver": {"sky_extra_levels": 2, "sky_fit_floor": 0}})";
     auto r = Capture(kBin + " solve " + bake + " --scene " + bad.string() + " 2>&1");
     EXPECT_EQ(r.code, 1) << r.out;
     EXPECT_NE(r.out.find(bad.string()), std::string::npos) << r.out;
