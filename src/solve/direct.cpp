@@ -186,17 +186,25 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
         add(penumbra[q], pen_e[q]);
     // 3. Fully lit points: the closed form above the point's horizon.
     const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
+    std::vector<Vec3d> clip_a(2 * l.vertices.size()), clip_b(4 * l.vertices.size());
     for (size_t q = 0; q < which.size(); ++q) {
         if (kind[q] != kLit)
             continue;
         const size_t p = which[q];
         const Vec3d x(points[p].position), h(points[p].horizon), f(points[p].face);
-        std::vector<Vec3d> clipped = l.vertices;
-        for (const Vec3d& plane : {h, f})
-            if (Dot(plane, plane) > 0 && clipped.size() >= 3)
-                clipped = ClipToHalfSpace(clipped, x, plane);
-        if (clipped.size() >= 3)
-            add(p, VectorIrradiance(clipped, 1.0, x, emission));
+        // Clipped in place of two buffers (no allocation per point): each clip at most
+        // doubles the vertex count.
+        const Vec3d* poly = l.vertices.data();
+        int n = int(l.vertices.size());
+        for (const Vec3d& plane : {h, f}) {
+            if (Dot(plane, plane) > 0 && n >= 3) {
+                Vec3d* dst = poly == clip_a.data() ? clip_b.data() : clip_a.data();
+                n = ClipToHalfSpace(poly, n, x, plane, dst);
+                poly = dst;
+            }
+        }
+        if (n >= 3)
+            add(p, VectorIrradiance({poly, size_t(n)}, 1.0, x, emission));
     }
     if (cls_out) {
         cls_out->assign(which.size() * nk, 0);
