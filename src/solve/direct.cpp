@@ -337,6 +337,8 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     // ray starts inside the chart) trace it.
     std::vector<size_t> traced;
     std::vector<Segment> segs;
+    traced.reserve(moved.size());
+    segs.reserve(moved.size());
     for (size_t p : moved) {
         const ReceiverPoint& rp = out[p];
         if (onto[p].geom_id != kNoHit && !(outline_face_inside_ && rp.outline))

@@ -54,6 +54,10 @@ public:
           state_(penumbra.size() * nv_, kUnknown),
           height_(penumbra.size() * nv_, kHeightUnknown) {
         PrepareHorizons();
+        // Room for twice the coarse level's cells (4 per fan triangle and point): the uniform
+        // cells' lists regrowing cost ~1 % of the bunny's solve in malloc and free.
+        visible_.reserve(penumbra.size() * nt_ * 8);
+        hidden_.reserve(penumbra.size() * nt_ * 8);
     }
 
     // Vertex states from an earlier pass over the same points (or none), and the light's
