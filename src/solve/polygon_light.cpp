@@ -9,6 +9,42 @@
 
 namespace mebake::solve {
 
+namespace {
+
+// atan(x) for 0 <= |x| <= 0.66: x + x^3 P(x^2) / Q(x^2), Cephes' atan.c (S. L. Moshier),
+// relative error ~1e-16.
+double AtanSmall(double x) {
+    constexpr double P[] = {-8.750608600031904122785E-1, -1.615753718733365076637E1,
+                            -7.500855792314704667340E1, -1.228866684490136173410E2,
+                            -6.485021904942025371773E1};
+    constexpr double Q[] = {2.485846490142306297962E1, 1.650270098316988542046E2,
+                            4.328810604912902668951E2, 4.853903996359136964868E2,
+                            1.945506571482613964425E2};
+    const double z = x * x;
+    const double p = (((P[0] * z + P[1]) * z + P[2]) * z + P[3]) * z + P[4];
+    const double q = ((((z + Q[0]) * z + Q[1]) * z + Q[2]) * z + Q[3]) * z + Q[4];
+    return x + x * (z * p / q);
+}
+
+}  // namespace
+
+double EdgeAngle(double y, double x) {
+    // pi/4, pi/2 and pi as two doubles each (value + the rest), as Cephes adds them.
+    constexpr double kPio4 = 0.78539816339744830962, kPio4Lo = 3.061616997868382943065E-17;
+    constexpr double kPio2 = 1.57079632679489661923, kPio2Lo = 6.123233995736765886130E-17;
+    constexpr double kPi = 3.14159265358979323846, kPiLo = 1.2246467991473531772E-16;
+    const double ax = std::abs(x);
+    const double lo = std::min(y, ax), hi = std::max(y, ax);
+    // The angle of (hi, lo) in [0, pi/4]: above tan = 0.66 by atan(t) = pi/4 + atan((t-1)/(t+1)).
+    double t = lo <= 0.66 * hi ? AtanSmall(lo / hi)
+                               : kPio4 + (AtanSmall((lo - hi) / (lo + hi)) + kPio4Lo);
+    if (y > ax)
+        t = (kPio2 - t) + kPio2Lo;
+    if (x < 0)
+        t = (kPi - t) + kPiLo;
+    return t;
+}
+
 Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
     Vec3d sum;
     for (int k = 0; k < nv; ++k) {
@@ -21,7 +57,7 @@ Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
         // is on the edge itself (on the emitter's plane, handled by the caller).
         if (!(len > 0))
             continue;
-        const double theta = std::atan2(len, Dot(a, b));
+        const double theta = EdgeAngle(len, Dot(a, b));
         sum += c * (theta / len);
     }
     return sum;

@@ -30,6 +30,13 @@ enum class Emission {
     kBoth,   // emits to both sides (a double-sided light panel)
 };
 
+// atan2(y, x) for y > 0 (an angle in (0, pi)), within one unit in the last place of
+// std::atan2 (polygon_light_test sweeps it): Cephes' rational atan on [0, 0.66] and one
+// reduction step, at about half glibc's cost. LambertSum takes one per edge, and the
+// penumbra's cells made glibc's atan2 ~6 % of a solve's CPU (bench/RESULTS.md, "Issue 13
+// (session 18)").
+double EdgeAngle(double y, double x);
+
 // Lambert's boundary sum over the closed polygon v[0..nv) seen from x:
 // sum_k theta_k * unit(a_k x e_k), a_k = v_k - x, e_k = v_k+1 - v_k (a x e equals
 // (v_k - x) x (v_k+1 - x) but loses less to cancellation when x is far from the edge).

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "solve/polygon_light.h"
+#include "solve/rays.h"
 #include "solve/sky.h"
 #include "solve/visibility.h"
 
@@ -273,6 +274,25 @@ TEST(DirectLight, LightBelowThePointsFaceIsBlockedByIt) {
     std::vector<ReceiverPoint> both = {on_fold[0], on_flat[0]};
     EXPECT_TRUE(direct.ShadowEdgeAmong(both));
     EXPECT_FALSE(direct.ShadowEdgeAmong(on_flat));
+}
+
+// A visibility point a little under or over the fold's face A moves onto it along its
+// normal, and takes A's plane from the ray that found it: the light below that plane is
+// cut as with a face ray, and no face ray is traced (one origin ray under the face, the
+// ray up; two over it, up then down).
+TEST(DirectLight, PointMovedOntoAFaceTakesItsPlaneWithoutAFaceRay) {
+    FoldScene f;
+    const float offset = 1e-3f, reach = 0.05f;
+    DirectLight direct(f.scene, f.scene.solver, f.vis, offset, 100, reach);
+    const Vec3f n(0, 1, 0);
+    for (const auto& [height, rays] : {std::pair{-0.002f, 1u}, std::pair{0.002f, 2u}}) {
+        std::vector<ReceiverPoint> pts = {{{0, height, 0}, n, {0, height, 0}, n}};
+        std::vector<float> e(9);
+        const uint64_t before = RaysByKind()[size_t(RayKind::kOrigin)];
+        direct.Evaluate(pts, e, DirectLight::kLights);
+        EXPECT_EQ(RaysByKind()[size_t(RayKind::kOrigin)] - before, rays) << height;
+        EXPECT_NEAR(e[1], 0.0, 1e-9) << height;  // cut by A's plane, as from its face ray
+    }
 }
 
 // A chart's outline across a convex bend: face A (y = tA z, z < 0) is the chart's real

@@ -87,5 +87,35 @@ TEST(Penumbra, GenericEdgeAnglesCloseToExact) {
     }
 }
 
+// Points on the lit side of the penumbra, where a sliver to half of the light is hidden:
+// most of their cells are visible, so E is taken as the whole light's closed form less the
+// hidden and partly hidden cells (PenumbraPass::Run). It must agree with the exact answer
+// as the sum over visible cells does (GenericEdgeAnglesCloseToExact: 3.5 % of the lit value
+// at worst), and the hidden part
+// must come off: well under the unoccluded value wherever a tenth of it is hidden.
+TEST(Penumbra, MostlyVisibleLightIsTheWholeLightLessTheHiddenPart) {
+    EdgeScene s(27.0);
+    DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
+    std::vector<ReceiverPoint> pts;
+    for (double t = -1.0; t <= 0.0; t += 0.05) {
+        const Vec3d p = Vec3d(s.e0.x, 0, s.e0.z) + s.n * t;
+        pts.push_back({Vec3f(p), {0, 1, 0}, Vec3f(p), {0, 1, 0}});
+    }
+    std::vector<float> e(pts.size() * 9);
+    direct.Evaluate(pts, e);
+    const double lit = IrradianceClipped(s.light.vertices, 1.0, Vec3d(0, 0, 0), Vec3d(0, 1, 0));
+    int partly = 0;
+    for (size_t p = 0; p < pts.size(); ++p) {
+        const Vec3d x(pts[p].position);
+        const double exact = s.Exact(x), full = IrradianceClipped(s.light.vertices, 1.0, x, {0, 1, 0});
+        EXPECT_NEAR(e[p * 9 + 1], exact, 0.035 * lit) << "t = " << -1.0 + 0.05 * double(p);
+        if (full - exact > 0.1 * full) {
+            ++partly;
+            EXPECT_LT(e[p * 9 + 1], full - 0.5 * (full - exact)) << "t = " << -1.0 + 0.05 * double(p);
+        }
+    }
+    EXPECT_GT(partly, 3);
+}
+
 }  // namespace
 }  // namespace mebake::solve

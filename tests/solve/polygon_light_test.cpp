@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -89,6 +90,40 @@ std::vector<Tri> Fan(const std::vector<Vec3d>& p) {
 // A square [-h,h]^2 at height z, counter-clockwise seen from below (it emits downwards).
 std::vector<Vec3d> CeilingSquare(double h, double z) {
     return {{-h, -h, z}, {-h, h, z}, {h, h, z}, {h, -h, z}};
+}
+
+// EdgeAngle is within one unit in the last place of std::atan2 over every octant, near the
+// reduction's switch points (tan = 0.66, 1) and at extreme ratios; and exact where
+// atan2 is (a right angle, a straight one's limit).
+TEST(PolygonLight, EdgeAngleIsAtan2WithinOneUlp) {
+    auto ulps = [](double a, double b) {
+        return std::abs(a - b) / std::abs(std::nextafter(a, 10.0) - a);
+    };
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<std::pair<double, double>> cases;
+    for (int i = 0; i < 200000; ++i)
+        cases.push_back({std::abs(u(rng)) * std::pow(10.0, 4 * u(rng)) + 1e-300,
+                         u(rng) * std::pow(10.0, 4 * u(rng))});
+    for (double r : {0.66, 1.0, 1 / 0.66}) {
+        for (int k = -20; k <= 20; ++k) {
+            const double y = r * (1 + k * 1e-15);
+            cases.push_back({y, 1.0});
+            cases.push_back({y, -1.0});
+        }
+    }
+    for (double y : {1e-300, 1e-20, 1e20, 1e300}) {
+        cases.push_back({y, 1.0});
+        cases.push_back({y, -1.0});
+        cases.push_back({1.0, y});
+        cases.push_back({1.0, -y});
+    }
+    double worst = 0;
+    for (const auto& [y, x] : cases)
+        worst = std::max(worst, ulps(std::atan2(y, x), EdgeAngle(y, x)));
+    EXPECT_LE(worst, 1.0);
+    EXPECT_EQ(EdgeAngle(1.0, 0.0), std::atan2(1.0, 0.0));
+    EXPECT_EQ(EdgeAngle(1.0, 1.0), std::atan2(1.0, 1.0));
 }
 
 TEST(PolygonLight, NormalAndAreaFollowTheWinding) {
