@@ -115,11 +115,11 @@ uint32_t UnionEmitterResolution(double scale, double parts_scale, uint32_t geome
                                 const ChartBuildOptions& opt) {
     if (!(parts_scale > 0) || !(scale > parts_scale))
         return 0;
-    // Samples as small as the parts' on average (rounded to the finer power of two), but
-    // no finer than the geometry the solver samples them from.
+    // Samples as small as the parts' on average (the nearest power of two: within a factor
+    // sqrt(2)), but no finer than the geometry the solver samples them from.
     const double want = opt.emitter_samples * scale / parts_scale;
     uint32_t n = opt.emitter_samples;
-    while (n < want && n < geometry_resolution)
+    while (n * std::sqrt(2.0) < want && n < geometry_resolution)
         n *= 2;
     return n > opt.emitter_samples ? n : 0;
 }
@@ -198,7 +198,9 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         // square of at most max_merged_resolution texels (and never more than
         // max_resolution, so it keeps every light-map texel it asks for).
         const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
-        mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
+        mopt.max_scale = merged_res *
+                         (opt.merge_horizon_cells ? opt.max_union_texel : std::sqrt(2.0)) *
+                         opt.texel_size;
         // The turn bound stays on 8 x 8 cells per union (texel_size 0): with cells of 8
         // texels lucy merged to 86 charts but its error against the path tracer rose from
         // 4.65 % to 6.33 %, its 512-texel charts' indirect light 18-24 % low from the

@@ -63,6 +63,13 @@ struct ChartBuildOptions {
     // instead of every 4, and lucy's merged charts lost bounced light (bench/RESULTS.md,
     // "Issue 13 (session 18)").
     uint32_t emitter_samples = 32;
+    // With merge_horizon_cells, a union's texel is at most this many times texel_size (the
+    // default merge: sqrt(2), the most ResolutionFor gives any chart). At sqrt(2) lucy's
+    // unions grew to 512 texels of 1.16 nominal texels on average (default ingest 1.05)
+    // and their direct light lost detail; at 1.2 the merged ingests' texels are the default
+    // ingest's within -0.11..+0.07 of nominal on the seven scans, lucy 90 charts
+    // (bench/RESULTS.md, "Issue 13 (session 18)").
+    double max_union_texel = 1.2;
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 
