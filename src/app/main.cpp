@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
     ing_cmd->add_flag("--merge-horizon-cells", ing.merge_horizon_cells,
                       "Merge charts with their turning bounded on cells of 8 light-map texels "
                       "instead of an 8 x 8 grid per chart: fewer, larger charts (experimental: "
-                      "lucy 237 -> 86 charts but less accurate; docs/method.md, \"Merging\")");
+                      "lucy 237 -> 90 charts, not yet as accurate; docs/method.md, \"Merging\")");
 
     // solve
     mebake::app::SolveCommand sol;

@@ -244,6 +244,9 @@ void ReadGeometry(const std::string& dir, GeometryCache* cache, std::vector<Solv
             while ((1u << level) < tile.meta.resolution)
                 ++level;
             sc.max_level = level;
+            sc.emitter_level = -1;
+            for (int l = 0; (1u << l) <= tile.meta.emitter_resolution; ++l)
+                sc.emitter_level = l;
         }
     }
     if (cache)

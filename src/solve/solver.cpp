@@ -136,6 +136,7 @@ int Solver::EmitterTop(const SolveChart& sc) const {
         const int span = std::countr_zero(unsigned(opt_.settings.emitter_texels));
         top = std::max(top, TexelLevel(sc) - span);
     }
+    top = std::max(top, sc.emitter_level);
     return std::min(finest, top);
 }
 

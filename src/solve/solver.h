@@ -40,6 +40,9 @@ struct SolveChart {
     GeometryPyramid geometry;  // hold geometry.Pin() while reading it
     double scale = 1;   // 3D length of the unit square's side
     int max_level = -1; // quadtree depth cap (the light-map texel); -1: the geometry's finest
+    // Finest emitter samples at least this deep (the tile's emitter_resolution: a merged
+    // chart keeps its parts' sample size); -1: the solver's own rule (Solver::EmitterTop).
+    int emitter_level = -1;
 };
 
 struct SolveOptions {

@@ -111,6 +111,19 @@ enum Stage : size_t { kLoad, kRepair, kSegment, kParameterize, kGrid, kGeometry,
 
 }  // namespace
 
+uint32_t UnionEmitterResolution(double scale, double parts_scale, uint32_t geometry_resolution,
+                                const ChartBuildOptions& opt) {
+    if (!(parts_scale > 0) || !(scale > parts_scale))
+        return 0;
+    // Samples as small as the parts' on average (the nearest power of two: within a factor
+    // sqrt(2)), but no finer than the geometry the solver samples them from.
+    const double want = opt.emitter_samples * scale / parts_scale;
+    uint32_t n = opt.emitter_samples;
+    while (n * std::sqrt(2.0) < want && n < geometry_resolution)
+        n *= 2;
+    return n > opt.emitter_samples ? n : 0;
+}
+
 // cos 30 degrees: beyond this a chart's own vertex normal and the brick's disagree because
 // the surface folds there, not because of noise.
 constexpr float kCreaseCos = 0.866f;
@@ -175,6 +188,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     MergeReport mreport;
     std::vector<ChartParam> merged_params;  // per chart after merging, when computed
     std::vector<uint8_t> united;            // per chart after merging: 1 for a union
+    std::vector<double> parts_scale;        // per chart after merging: its parts' mean square
     if (opt.merge_charts) {
         MergeOptions mopt;
         mopt.param = popt;
@@ -184,7 +198,9 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         // square of at most max_merged_resolution texels (and never more than
         // max_resolution, so it keeps every light-map texel it asks for).
         const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
-        mopt.max_scale = merged_res * std::sqrt(2.0) * opt.texel_size;
+        mopt.max_scale = merged_res *
+                         (opt.merge_horizon_cells ? opt.max_union_texel : std::sqrt(2.0)) *
+                         opt.texel_size;
         // The turn bound stays on 8 x 8 cells per union (texel_size 0): with cells of 8
         // texels lucy merged to 86 charts but its error against the path tracer rose from
         // 4.65 % to 6.33 %, its 512-texel charts' indirect light 18-24 % low from the
@@ -195,7 +211,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             mopt.min_resolution = opt.min_resolution;
             mopt.max_resolution = opt.max_resolution;
         }
-        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united);
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united, &parts_scale);
     }
 
     // Charts in id order; a chart that fails (not a disc, flipped or overlapping, too distorted) is split
@@ -207,6 +223,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         int depth = 0;
         ChartParam param;
         bool united = false;  // a union from the merge (its own geometry resolution)
+        double parts_scale = 0;  // of a union: its parts' mean square side (chart_merge.h)
     };
     std::deque<Pending> queue;
     {
@@ -217,6 +234,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
                 queue.back().param = std::move(merged_params[c]);
             queue.back().united = opt.merge_horizon_cells && united.size() == charts.size() &&
                                   united[c];
+            if (queue.back().united)
+                queue.back().parts_scale = parts_scale[c];
         }
     }
     clock.Lap(kSegment);
@@ -289,6 +308,9 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         m.triangle_count = uint32_t(chart.triangles.size());
         m.resolution = res;
         m.grid_resolution = uint32_t(grid_res);
+        if (item.united)
+            m.emitter_resolution = UnionEmitterResolution(param.scale, item.parts_scale,
+                                                          tile.geometry.resolution, opt);
         m.scale = param.scale;
         m.area = param.metrics.area_3d;
         m.jacobian_deviation = param.metrics.jacobian_deviation_mean;

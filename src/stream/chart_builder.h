@@ -56,6 +56,20 @@ struct ChartBuildOptions {
     // +0.87 -> +0.15 point against main at the same points; 512 samples leaked light in the
     // horse's folds, +0.95; bench/RESULTS.md, "Issue 13 (session 16)").
     uint32_t union_geometry_resolution = 256;
+    // With merge_horizon_cells, a union's emitter samples are no larger than its parts'
+    // were (ChartMeta::emitter_resolution): the solver gives every chart this many emitter
+    // samples a side (solve/solver.h, max_emitter_level), so a union of four 128-texel
+    // charts into a 512-texel one would otherwise sample its light every 16 texels
+    // instead of every 4, and lucy's merged charts lost bounced light (bench/RESULTS.md,
+    // "Issue 13 (session 18)").
+    uint32_t emitter_samples = 32;
+    // With merge_horizon_cells, a union's texel is at most this many times texel_size (the
+    // default merge: sqrt(2), the most ResolutionFor gives any chart). At sqrt(2) lucy's
+    // unions grew to 512 texels of 1.16 nominal texels on average (default ingest 1.05)
+    // and their direct light lost detail; at 1.2 the merged ingests' texels are the default
+    // ingest's within -0.11..+0.07 of nominal on the seven scans, lucy 90 charts
+    // (bench/RESULTS.md, "Issue 13 (session 18)").
+    double max_union_texel = 1.2;
     size_t cache_bytes = size_t(3) << 20;  // vertex look-ups for this brick (ascending ids)
 };
 
@@ -71,6 +85,13 @@ struct BrickResult {
     std::vector<Vec3f> proxy_positions;
     std::vector<uint32_t> proxy_triangles;
 };
+
+// The emitter samples a side (ChartMeta::emitter_resolution) of a union of square side
+// `scale` whose parts' mean square side was parts_scale: enough that its samples are no
+// larger than the parts' (opt.emitter_samples each), at most geometry_resolution; 0 when
+// the solver's own opt.emitter_samples are fine enough.
+uint32_t UnionEmitterResolution(double scale, double parts_scale, uint32_t geometry_resolution,
+                                const ChartBuildOptions& opt);
 
 BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt);
 

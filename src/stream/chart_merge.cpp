@@ -271,6 +271,7 @@ struct MergeState {
     std::vector<double> area;
     std::vector<Trial> live;                           // square < 0: never merged
     std::vector<uint8_t> joined;                       // 1: a union of input charts
+    std::vector<double> part_scale;  // sum over its input charts of area x their own scale
     std::set<std::pair<uint32_t, uint32_t>> rejected;  // pairs tried once and failed
 
     Trial TryUnion(const std::vector<uint32_t>& fa, const std::vector<uint32_t>& fb) const {
@@ -319,6 +320,8 @@ struct MergeState {
         joined[a] = 1;
         area[a] += area[b];
         area[b] = 0;
+        part_scale[a] += part_scale[b];
+        part_scale[b] = 0;
     }
 };
 
@@ -326,12 +329,14 @@ struct MergeState {
 
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
                         std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params,
-                        std::vector<uint8_t>* united) {
+                        std::vector<uint8_t>* united, std::vector<double>* parts_scale) {
     std::vector<uint32_t>& chart = *chart_of;
     if (params)
         params->clear();
     if (united)
         united->clear();
+    if (parts_scale)
+        parts_scale->clear();
     CHECK_EQ(chart.size(), mesh.triangle_count());
     MergeReport report;
     size_t chart_count = 0;
@@ -342,7 +347,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         return report;
     const Geometry g = Measure(mesh);
     const double fold_cos = std::cos(options.fold_deg * kPi / 180);
-    MergeState st{mesh, options, chart, {}, {}, {}, {}, {}};
+    MergeState st{mesh, options, chart, {}, {}, {}, {}, {}, {}};
     st.faces_of.resize(chart_count);
     st.area.assign(chart_count, 0);
     for (uint32_t f = 0; f < chart.size(); ++f) {
@@ -356,6 +361,9 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     ParallelFor(0, int64_t(chart_count), [&](int64_t c) {
         st.live[size_t(c)] = st.TryUnion(st.faces_of[size_t(c)], {});
     });
+    st.part_scale.resize(chart_count);
+    for (size_t c = 0; c < chart_count; ++c)
+        st.part_scale[c] = st.live[c].square >= 0 ? st.area[c] * st.live[c].param.scale : 0;
 
     for (int round = 0; round < options.max_rounds; ++round) {
         size_t folds = 0;
@@ -394,6 +402,8 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
                 params->push_back(std::move(st.live[c].param));
             if (united)
                 united->push_back(st.joined[c]);
+            if (parts_scale)
+                parts_scale->push_back(st.area[c] > 0 ? st.part_scale[c] / st.area[c] : 0);
         }
         c = remap[c];
     }

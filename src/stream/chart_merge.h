@@ -70,10 +70,15 @@ struct MergeReport {
 // ParameterizeChart(ExtractCharts(mesh, *chart_of)[c], options.param) (status kEmpty
 // where it was never computed: a chart over the vertex bound), so the caller need not
 // compute it again. If united is given, (*united)[c] is 1 where final chart c is a union
-// of two or more of the input charts, 0 where it is an input chart as it was.
+// of two or more of the input charts, 0 where it is an input chart as it was. If
+// parts_scale is given, (*parts_scale)[c] is the mean square side (ParamChart::scale) of
+// final chart c's input charts, weighted by their 3D area: the size of the squares its
+// surface had before merging (its own scale for an input chart; 0 for one that failed on
+// its own).
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
                         std::vector<uint32_t>* chart_of,
                         std::vector<ChartParam>* params = nullptr,
-                        std::vector<uint8_t>* united = nullptr);
+                        std::vector<uint8_t>* united = nullptr,
+                        std::vector<double>* parts_scale = nullptr);
 
 }  // namespace mebake::stream

@@ -64,9 +64,10 @@ ChartTile ReadTile(const std::string& path, TileParts parts) {
     const auto& m = t.meta;
     auto pow2 = [](uint32_t x) { return x != 0 && (x & (x - 1)) == 0 && x <= 65536; };
     if (!pow2(m.resolution) || !pow2(m.geometry_resolution) || !std::isfinite(m.scale) ||
-        m.scale <= 0)
-        CorruptError({path}, "META chunk is inconsistent (resolution {}, geometry {}, scale {})",
-                     m.resolution, m.geometry_resolution, m.scale);
+        m.scale <= 0 || (m.emitter_resolution != 0 && !pow2(m.emitter_resolution)))
+        CorruptError({path},
+                     "META chunk is inconsistent (resolution {}, geometry {}, scale {}, emitter {})",
+                     m.resolution, m.geometry_resolution, m.scale, m.emitter_resolution);
     if (parts != TileParts::Mesh) {
         const uint32_t g = m.geometry_resolution;
         t.geometry.resolution = g;

@@ -32,7 +32,9 @@ struct ChartMeta {
     uint32_t resolution = 0;           // light-map texels per side
     uint32_t grid_resolution = 0;
     uint32_t geometry_resolution = 0;  // geometry image texels per side (<= resolution)
-    uint32_t reserved1 = 0;
+    // The solver's finest emitter samples per side at least (a power of two), or 0 for
+    // its own rule: a merged chart keeps the sample size its parts had (chart_builder.h).
+    uint32_t emitter_resolution = 0;
     double scale = 0;
     double area = 0;
     double jacobian_deviation = 0;

@@ -121,29 +121,67 @@ TEST(ChartBuilder, AUnionsGeometryFollowsItsTexels) {
     o.texel_size = 3.14159 / 200;  // a union of pi a side: 256 texels
     o.max_geometry_resolution = 32;
     o.union_geometry_resolution = 128;
+    struct Chart {
+        uint32_t texels = 0, geometry = 0, emitter = 0;
+        double scale = 0;
+    };
     auto charts = [&](bool horizon_cells, bool merge) {
         o.merge_horizon_cells = horizon_cells;
         o.merge_charts = merge;
         const BrickResult r = BuildBrickCharts(dir.string(), 0, o);
-        std::vector<std::pair<uint32_t, uint32_t>> res;  // light map, geometry
-        for (size_t c = 0; c < r.charts.size(); ++c)
-            res.emplace_back(r.charts[c].resolution,
-                             ReadTile(r.tile_files[c], TileParts::GeometryImage).geometry.resolution);
+        std::vector<Chart> res;
+        for (size_t c = 0; c < r.charts.size(); ++c) {
+            const ChartTile t = ReadTile(r.tile_files[c], TileParts::GeometryImage);
+            res.push_back({r.charts[c].resolution, t.geometry.resolution,
+                           t.meta.emitter_resolution, r.charts[c].scale});
+        }
         return res;
     };
     const auto apart = charts(true, false);
     ASSERT_GE(apart.size(), 2u);  // the normal cone cut it
-    for (const auto& [texels, geometry] : apart)
-        EXPECT_EQ(geometry, std::min(texels, 32u));
+    double largest_part = 0;
+    for (const Chart& c : apart) {
+        EXPECT_EQ(c.geometry, std::min(c.texels, 32u));
+        EXPECT_EQ(c.emitter, 0u) << "a chart that is not a union keeps the solver's rule";
+        largest_part = std::max(largest_part, c.scale);
+    }
     const auto merged = charts(true, true);
     ASSERT_LT(merged.size(), apart.size());
-    uint32_t finest = 0;
-    for (const auto& [texels, geometry] : merged) {
-        EXPECT_EQ(geometry, std::min(texels, 128u)) << "a union's geometry follows its texels";
-        finest = std::max(finest, geometry);
+    uint32_t finest = 0, finest_emitter = 0;
+    for (const Chart& c : merged) {
+        EXPECT_EQ(c.geometry, std::min(c.texels, 128u)) << "a union's geometry follows its texels";
+        finest = std::max(finest, c.geometry);
+        // Its emitter samples are about as small as its parts' (32 a side each: within a
+        // factor sqrt(2)), and no finer than its geometry.
+        if (c.emitter != 0) {
+            EXPECT_GT(c.emitter, o.emitter_samples);
+            EXPECT_LE(c.emitter, c.geometry);
+            EXPECT_LE(c.scale / c.emitter, std::sqrt(2.0) * largest_part / o.emitter_samples);
+        }
+        finest_emitter = std::max(finest_emitter, c.emitter);
     }
     EXPECT_GT(finest, 32u);
+    // The normal cone cut the half cylinder into strips along its axis, each in a square as
+    // large as the union's: the union's samples are its parts' size already.
+    EXPECT_EQ(finest_emitter, 0u) << "a union of strips needs no finer emitter samples";
     fs::remove_all(dir);
+}
+
+// A union's emitter samples: as many a side as keep them as small as its parts' mean sample
+// (the nearest power of two, so within a factor sqrt(2)), at most its geometry's; 0 (the
+// solver's own 32 a side) when that is fine enough.
+TEST(ChartBuilder, UnionEmitterResolutionKeepsItsPartsSampleSize) {
+    ChartBuildOptions o;  // 32 samples a side per chart
+    EXPECT_EQ(UnionEmitterResolution(4, 1, 256, o), 128u);   // four times the parts' side
+    EXPECT_EQ(UnionEmitterResolution(3, 1, 256, o), 128u);   // 96: nearer 128 than 64
+    EXPECT_EQ(UnionEmitterResolution(2.5, 1, 256, o), 64u);  // 80: nearer 64
+    EXPECT_EQ(UnionEmitterResolution(4, 1, 64, o), 64u);     // the geometry's cap
+    EXPECT_EQ(UnionEmitterResolution(2, 1.5, 256, o), 0u);   // 42.7: 32 is near enough
+    EXPECT_EQ(UnionEmitterResolution(2, 2, 256, o), 0u);     // not larger than its parts
+    EXPECT_EQ(UnionEmitterResolution(2, 0, 256, o), 0u);     // parts unknown
+    EXPECT_EQ(UnionEmitterResolution(4, 1, 32, o), 0u);      // geometry no finer than 32
+    o.emitter_samples = 8;
+    EXPECT_EQ(UnionEmitterResolution(4, 1, 256, o), 32u);
 }
 
 }  // namespace
