@@ -337,13 +337,20 @@ TEST(LinkRefine, DeferredLinkRaysGiveTheBytesOfLinkByLink) {
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {
-    auto run = [](int threads) {
-        ThreadLimit limit(threads);
-        return SolveBox(SolveOptions{}.link_tolerance).e;
-    };
-    const auto a = run(1), b = run(2);
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+    // With SolverSettings::link_size_error off (the default) and on.
+    for (double size_error : {0.0, 0.08}) {
+        auto run = [size_error](int threads) {
+            ThreadLimit limit(threads);
+            const SolveOptions o;
+            return SolveBox(o.link_tolerance, false, o.link_probes, o.split_probes,
+                            o.link_defer_pairs, size_error)
+                .e;
+        };
+        const auto a = run(1), b = run(2);
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0)
+            << "link_size_error " << size_error;
+    }
 }
 
 }  // namespace
