@@ -482,7 +482,8 @@ public:
                 // (SolverSettings::link_size_error), not by the whole bound.
                 if (!accept && dist > 0 && size_error_ > 0) {
                     const double rho = std::max(size_r, size_e) / dist;
-                    accept = tolerance_.Accepts(lk.node, b * std::min(1.0, size_error_ * rho * rho));
+                    const double share = std::min(1.0, size_error_ * rho * rho);
+                    accept = tolerance_.Accepts(lk.node, b * share);
                 }
             }
             if (accept) {
