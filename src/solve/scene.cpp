@@ -157,6 +157,9 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->light_samples = s.value("light_samples", o->light_samples);
     o->cluster_links = s.value("cluster_links", o->cluster_links);
     o->link_tolerance = s.value("link_tolerance", o->link_tolerance);
+    o->link_size_error = s.value("link_size_error", o->link_size_error);
+    if (!(o->link_size_error >= 0))
+        InputError({scene_file}, "solver.link_size_error must be >= 0");
     o->sky_extra_levels = s.value("sky_extra_levels", o->sky_extra_levels);
     o->sky_fit_floor = s.value("sky_fit_floor", o->sky_fit_floor);
     o->emitter_texels = s.value("emitter_texels", o->emitter_texels);

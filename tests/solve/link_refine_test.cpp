@@ -178,10 +178,12 @@ struct BoxRun {
 BoxRun SolveBox(double link_tolerance, bool block = false,
                int link_probes = SolveOptions{}.link_probes,
                bool split_probes = SolveOptions{}.split_probes,
-               size_t link_defer_pairs = SolveOptions{}.link_defer_pairs) {
+               size_t link_defer_pairs = SolveOptions{}.link_defer_pairs,
+               double link_size_error = SolverSettings{}.link_size_error) {
     testing::LitBox box(5, 32, block);
     SolveOptions opt;
     opt.settings.max_bounces = 8;
+    opt.settings.link_size_error = link_size_error;
     opt.link_tolerance = link_tolerance;
     opt.link_probes = link_probes;
     opt.split_probes = split_probes;
@@ -228,6 +230,37 @@ TEST(LinkRefine, LitBoxWithinToleranceWithFewerLinkRays) {
     EXPECT_LT(worst, 0.005);
     EXPECT_LT(mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) * 4 / 5);  // measured: 0.59
+}
+
+// SolverSettings::link_size_error: from the second batch on, a link whose spheres are apart
+// stops where its point samples' share of the bound, K (size / gap)^2, is within the
+// allowance. In the lit box with the table (its shadow and near walls), against the whole
+// bound (K = 0): within the tolerance, with fewer link rays.
+TEST(LinkRefine, SizeErrorStopsApartLinksSoonerWithinTolerance) {
+    const double tol = SolveOptions{}.link_tolerance;
+    const int probes = SolveOptions{}.link_probes;
+    const bool split = SolveOptions{}.split_probes;
+    const size_t defer = SolveOptions{}.link_defer_pairs;
+    const BoxRun ref = SolveBox(tol, true, probes, split, defer, 0);
+    const BoxRun got = SolveBox(tol, true, probes, split, defer, 0.08);
+    ASSERT_EQ(ref.e.size(), got.e.size());
+    double top = 0, worst = 0, sum = 0;
+    for (double v : ref.e)
+        top = std::max(top, v);
+    ASSERT_GT(top, 0);
+    for (size_t k = 0; k < ref.e.size(); ++k) {
+        const double d = std::abs(got.e[k] - ref.e[k]) / top;
+        worst = std::max(worst, d);
+        sum += d;
+    }
+    const double mean = sum / double(ref.e.size());
+    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f\n",
+                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
+                worst, mean);
+    EXPECT_GT(worst, 0);  // the rule changed some links
+    EXPECT_LT(worst, 0.01);
+    EXPECT_LT(mean, 0.001);
+    EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats));
 }
 
 // Link probes (Solver::Gatherer::TraceLink): with a table in the box, links are wholly
@@ -304,13 +337,20 @@ TEST(LinkRefine, DeferredLinkRaysGiveTheBytesOfLinkByLink) {
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {
-    auto run = [](int threads) {
-        ThreadLimit limit(threads);
-        return SolveBox(SolveOptions{}.link_tolerance).e;
-    };
-    const auto a = run(1), b = run(2);
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+    // With SolverSettings::link_size_error off (the default) and on.
+    for (double size_error : {0.0, 0.08}) {
+        auto run = [size_error](int threads) {
+            ThreadLimit limit(threads);
+            const SolveOptions o;
+            return SolveBox(o.link_tolerance, false, o.link_probes, o.split_probes,
+                            o.link_defer_pairs, size_error)
+                .e;
+        };
+        const auto a = run(1), b = run(2);
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0)
+            << "link_size_error " << size_error;
+    }
 }
 
 }  // namespace
