@@ -62,9 +62,9 @@ struct SolverSettings {
     double link_tolerance = 1;    // error-driven link refinement (link_refine.h); 0: off
     // A link whose spheres are apart errs by about link_size_error x (size / gap)^2 of its
     // bound (the point samples of its kernel), so it also stops where that share of the
-    // bound is within the allowance, from the second batch on (Gatherer::Shoot;
-    // 0: off, the bound itself as before).
-    double link_size_error = 0;
+    // bound is within the allowance, from the second batch on (Gatherer::Shoot; 0: off, the
+    // bound itself as before session 18). 0.08 ~ 1 / (4 pi), the near form's own bound.
+    double link_size_error = 0.08;
     // The sky's refinement below its gathering level (Solver::GatherSky): at most this many
     // levels deeper, and only where its fit misses by more than sky_fit_floor sky
     // directions' shares of E as well as by the tolerance (0: the tolerance alone).

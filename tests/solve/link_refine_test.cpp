@@ -337,7 +337,7 @@ TEST(LinkRefine, DeferredLinkRaysGiveTheBytesOfLinkByLink) {
 }
 
 TEST(LinkRefine, BitIdenticalForAnyThreadCount) {
-    // With SolverSettings::link_size_error off (the default) and on.
+    // With SolverSettings::link_size_error off (the rule before session 18) and at its default.
     for (double size_error : {0.0, 0.08}) {
         auto run = [size_error](int threads) {
             ThreadLimit limit(threads);
