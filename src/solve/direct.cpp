@@ -239,7 +239,8 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     // visibility points are never read: they are not moved (no origin rays). Unless a light
     // is known: it is evaluated at every point, found probes too.
     std::vector<uint8_t> found;
-    const bool none_known = std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
+    const bool none_known =
+        std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
     if (cache && !with_sky && none_known && probes > 0 && probes < points.size()) {
         found.assign(points.size(), 0);
         for (size_t q = 0; q < probes; ++q)
