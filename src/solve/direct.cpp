@@ -235,7 +235,18 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     if (cache)
         CHECK_EQ(keys.size(), probes);
     const bool with_sky = sky_.type != Sky::Type::None && (parts & kSky);
-    const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky);
+    // Probes found in the cache take their E and states from it (AddLights) and their
+    // visibility points are never read: they are not moved (no origin rays). Unless a light
+    // is known: it is evaluated at every point, found probes too.
+    std::vector<uint8_t> found;
+    const bool none_known =
+        std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
+    if (cache && !with_sky && none_known && probes > 0 && probes < points.size()) {
+        found.assign(points.size(), 0);
+        for (size_t q = 0; q < probes; ++q)
+            found[q] = cache->map_.count(keys[q]) ? 1 : 0;
+    }
+    const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky, found);
     if (parts & kLights)
         AddLights(on_surface, out, probes, cache, keys, known);
     if (with_sky)
@@ -287,11 +298,12 @@ bool DirectLight::ShadowEdgeAmong(std::span<const ReceiverPoint> points) const {
 // ray the other way meeting the front of a triangle within `reach_` means it is above: it
 // moves down onto it.
 std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint> points,
-                                                   bool lights_only) const {
+                                                   bool lights_only,
+                                                   std::span<const uint8_t> skip) const {
     std::vector<ReceiverPoint> out(points.begin(), points.end());
     std::vector<size_t> which;
     for (size_t p = 0; p < points.size(); ++p)
-        if (!lights_only || ReachedByALight(points[p]))
+        if ((skip.empty() || !skip[p]) && (!lights_only || ReachedByALight(points[p])))
             which.push_back(p);
     const std::vector<size_t> moved = which;
     // The triangle each point moved onto (its ray's hit; geom_id kNoHit: not moved).

@@ -168,8 +168,10 @@ private:
     // points with a horizon, the plane of the face under their shadow-ray origin (`face`).
     // lights_only: only the points some light reaches (the others as they are; no ray).
     // With outline_face_inside, an outline point's face is looked for just inside its chart.
+    // skip (empty, or one per point): points left as they are (no ray).
     std::vector<ReceiverPoint> OnSurface(std::span<const ReceiverPoint> points,
-                                         bool lights_only = false) const;
+                                         bool lights_only = false,
+                                         std::span<const uint8_t> skip = {}) const;
     class PenumbraPass;  // penumbra.cpp
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,

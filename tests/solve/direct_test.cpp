@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numbers>
 
@@ -293,6 +294,39 @@ TEST(DirectLight, PointMovedOntoAFaceTakesItsPlaneWithoutAFaceRay) {
         EXPECT_EQ(RaysByKind()[size_t(RayKind::kOrigin)] - before, rays) << height;
         EXPECT_NEAR(e[1], 0.0, 1e-9) << height;  // cut by A's plane, as from its face ray
     }
+}
+
+// Probes found in the cache take their E and states from it, so their visibility points
+// are not moved onto the surface: a patch of four probes and a centre on patch C, a little
+// under it (one origin ray each, up), evaluated twice with one cache traces five origin rays,
+// then one (the centre's), and gives the same bits. With the light taken as known it is
+// evaluated at the probes too, so they are moved again.
+TEST(DirectLight, ProbesFoundInTheCacheAreNotMovedOntoTheSurface) {
+    FoldScene f;
+    DirectLight direct(f.scene, f.scene.solver, f.vis, 1e-3f, 100, 0.05f);
+    const Vec3f n(0, 1, 0);
+    std::vector<ReceiverPoint> pts;
+    std::vector<ProbeKey> keys;
+    for (const auto& [x, z] : {std::pair{4.5f, -0.5f}, {5.5f, -0.5f}, {4.5f, 0.5f}, {5.5f, 0.5f},
+                               {5.f, 0.f}}) {
+        pts.push_back({{x, -0.002f, z}, n, {x, -0.002f, z}, n});
+        if (keys.size() < 4)
+            keys.push_back({std::bit_cast<uint32_t>(x), std::bit_cast<uint32_t>(z), 0, 0});
+    }
+    ProbeCache cache;
+    auto origin_rays = [&](std::vector<float>* e, std::span<const uint8_t> known) {
+        const uint64_t before = RaysByKind()[size_t(RayKind::kOrigin)];
+        direct.Evaluate(pts, *e, DirectLight::kLights, 4, &cache, keys, known);
+        return RaysByKind()[size_t(RayKind::kOrigin)] - before;
+    };
+    std::vector<float> first(pts.size() * 9), again(pts.size() * 9), known_e(pts.size() * 9);
+    EXPECT_EQ(origin_rays(&first, {}), 5u);
+    EXPECT_EQ(cache.size(), 4u);
+    ASSERT_GT(first[4 * 9 + 1], 0.f);  // the centre is lit
+    EXPECT_EQ(origin_rays(&again, {}), 1u);
+    EXPECT_EQ(first, again);
+    const std::vector<uint8_t> lit = {2};
+    EXPECT_EQ(origin_rays(&known_e, lit), 5u);
 }
 
 // A chart's outline across a convex bend: face A (y = tA z, z < 0) is the chart's real
