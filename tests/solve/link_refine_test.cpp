@@ -209,6 +209,31 @@ uint64_t LinkRays(const SolveStats& s) {
                                                           : 0;
 }
 
+// |got - ref| over the box's points as a share of ref's brightest point: its largest and
+// mean, printed with both runs' link rays.
+struct BoxDiff {
+    double top = 0, worst = 0, mean = 0;
+};
+BoxDiff DiffToBrightest(const BoxRun& ref, const BoxRun& got) {
+    EXPECT_EQ(ref.e.size(), got.e.size());
+    BoxDiff d;
+    for (double v : ref.e)
+        d.top = std::max(d.top, v);
+    EXPECT_GT(d.top, 0);
+    const size_t n = std::min(ref.e.size(), got.e.size());
+    double sum = 0;
+    for (size_t k = 0; k < n && d.top > 0; ++k) {
+        const double x = std::abs(got.e[k] - ref.e[k]) / d.top;
+        d.worst = std::max(d.worst, x);
+        sum += x;
+    }
+    d.mean = n ? sum / double(n) : 0;
+    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f\n",
+                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
+                d.worst, d.mean);
+    return d;
+}
+
 TEST(LinkRefine, LitBoxWithinToleranceWithFewerLinkRays) {
     const BoxRun ref = SolveBox(0), got = SolveBox(SolveOptions{}.link_tolerance);  // the default
     ASSERT_EQ(ref.e.size(), got.e.size());
@@ -243,23 +268,10 @@ TEST(LinkRefine, SizeErrorStopsApartLinksSoonerWithinTolerance) {
     const size_t defer = SolveOptions{}.link_defer_pairs;
     const BoxRun ref = SolveBox(tol, true, probes, split, defer, 0);
     const BoxRun got = SolveBox(tol, true, probes, split, defer, 0.08);
-    ASSERT_EQ(ref.e.size(), got.e.size());
-    double top = 0, worst = 0, sum = 0;
-    for (double v : ref.e)
-        top = std::max(top, v);
-    ASSERT_GT(top, 0);
-    for (size_t k = 0; k < ref.e.size(); ++k) {
-        const double d = std::abs(got.e[k] - ref.e[k]) / top;
-        worst = std::max(worst, d);
-        sum += d;
-    }
-    const double mean = sum / double(ref.e.size());
-    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f\n",
-                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
-                worst, mean);
-    EXPECT_GT(worst, 0);  // the rule changed some links
-    EXPECT_LT(worst, 0.01);
-    EXPECT_LT(mean, 0.001);
+    const BoxDiff d = DiffToBrightest(ref, got);
+    EXPECT_GT(d.worst, 0);  // the rule changed some links
+    EXPECT_LT(d.worst, 0.01);
+    EXPECT_LT(d.mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats));
 }
 
@@ -269,25 +281,13 @@ TEST(LinkRefine, SizeErrorStopsApartLinksSoonerWithinTolerance) {
 TEST(LinkRefine, ProbesKeepTheAnswerOfEveryPairWithFewerRays) {
     const double tol = SolveOptions{}.link_tolerance;
     const BoxRun ref = SolveBox(tol, true, 0), got = SolveBox(tol, true);
-    ASSERT_EQ(ref.e.size(), got.e.size());
-    double top = 0, worst = 0, sum = 0;
-    for (double v : ref.e)
-        top = std::max(top, v);
-    ASSERT_GT(top, 0);
+    const BoxDiff d = DiffToBrightest(ref, got);
     size_t dark = 0;
-    for (size_t k = 0; k < ref.e.size(); ++k) {
-        const double d = std::abs(got.e[k] - ref.e[k]) / top;
-        worst = std::max(worst, d);
-        sum += d;
-        dark += ref.e[k] < 0.2 * top ? 1 : 0;
-    }
-    const double mean = sum / double(ref.e.size());
-    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f, dark %zu\n",
-                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
-                worst, mean, dark);
+    for (double v : ref.e)
+        dark += v < 0.2 * d.top ? 1 : 0;
     EXPECT_GT(dark, 0u);  // the table's shadow
-    EXPECT_LT(worst, 0.01);
-    EXPECT_LT(mean, 0.001);
+    EXPECT_LT(d.worst, 0.01);
+    EXPECT_LT(d.mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) * 2 / 5);  // measured: 0.29
 }
 
@@ -299,22 +299,9 @@ TEST(LinkRefine, SplitProbesKeepTheShadowWithFewerRays) {
     const double tol = SolveOptions{}.link_tolerance;
     const int probes = SolveOptions{}.link_probes;
     const BoxRun ref = SolveBox(tol, true, probes, false), got = SolveBox(tol, true, probes, true);
-    ASSERT_EQ(ref.e.size(), got.e.size());
-    double top = 0, worst = 0, sum = 0;
-    for (double v : ref.e)
-        top = std::max(top, v);
-    ASSERT_GT(top, 0);
-    for (size_t k = 0; k < ref.e.size(); ++k) {
-        const double d = std::abs(got.e[k] - ref.e[k]) / top;
-        worst = std::max(worst, d);
-        sum += d;
-    }
-    const double mean = sum / double(ref.e.size());
-    std::printf("link rays %llu -> %llu, difference / brightest max %.4f mean %.5f\n",
-                (unsigned long long)LinkRays(ref.stats), (unsigned long long)LinkRays(got.stats),
-                worst, mean);
-    EXPECT_LT(worst, 0.01);
-    EXPECT_LT(mean, 0.001);
+    const BoxDiff d = DiffToBrightest(ref, got);
+    EXPECT_LT(d.worst, 0.01);
+    EXPECT_LT(d.mean, 0.001);
     EXPECT_LT(LinkRays(got.stats), LinkRays(ref.stats) / 2);  // measured: 0.38
 }
 
