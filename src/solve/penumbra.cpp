@@ -12,7 +12,6 @@
 #include "solve/rays.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace mebake::solve {
@@ -54,6 +53,7 @@ public:
           state_(penumbra.size() * nv_, kUnknown),
           height_(penumbra.size() * nv_, kHeightUnknown) {
         PrepareHorizons();
+        clip_.resize(6 * std::max<size_t>(3, l.vertices.size()));
         // Room for twice the coarse level's cells (4 per fan triangle and point): the uniform
         // cells' lists regrowing cost ~1 % of the bunny's solve in malloc and free.
         visible_.reserve(penumbra.size() * nt_ * 8);
@@ -164,43 +164,35 @@ private:
     Vec3d ClosedForm(const Cell& c) const {
         const Vec3d tri[3] = {l_.grid_pos[CornerIndex(c, 0)], l_.grid_pos[CornerIndex(c, 1)],
                               l_.grid_pos[CornerIndex(c, 2)]};
-        const ReceiverPoint& rp = points_[penumbra_[c.q]];
-        const Vec3d x(rp.position);
-        if (!cut_[c.q])
-            return LambertSum(tri, 3, x) * sign_[c.q];
-        Vec3d* poly = clip_.data();  // 6, then 12 for the second clip
-        Vec3d* both = clip_.data() + 6;
-        const int n = ClipToHalfSpace(tri, 3, x, Vec3d(rp.horizon), poly);
-        if (n < 3)
-            return Vec3d{};
-        if (Dot(rp.face, rp.face) == 0)
-            return LambertSum(poly, n, x) * sign_[c.q];
-        const int m = ClipToHalfSpace(poly, n, x, Vec3d(rp.face), both);
-        if (m < 3)
-            return Vec3d{};
-        return LambertSum(both, m, x) * sign_[c.q];
+        return AbovePlanes(tri, 3, c.q);
     }
 
     // The whole light's E if it were wholly visible, above the point's planes: the sum of
     // every cell's ClosedForm.
     Vec3d WholeLight(uint32_t q) const {
+        return AbovePlanes(l_.vertices.data(), int(l_.vertices.size()), q);
+    }
+
+    // E at point q of the polygon v[0..nv) where it is above the point's horizon and face
+    // plane (clipped only where the light crosses them, cut_).
+    Vec3d AbovePlanes(const Vec3d* v, int nv, uint32_t q) const {
         const ReceiverPoint& rp = points_[penumbra_[q]];
         const Vec3d x(rp.position);
-        const Vec3d* poly = l_.vertices.data();
-        int n = int(l_.vertices.size());
-        if (cut_[q]) {
-            std::vector<Vec3d>& a = whole_[0];
-            std::vector<Vec3d>& b = whole_[1];
-            a.resize(2 * l_.vertices.size());
-            b.resize(4 * l_.vertices.size());
-            n = ClipToHalfSpace(poly, n, x, Vec3d(rp.horizon), a.data());
-            poly = a.data();
-            if (n >= 3 && Dot(rp.face, rp.face) > 0) {
-                n = ClipToHalfSpace(poly, n, x, Vec3d(rp.face), b.data());
-                poly = b.data();
-            }
-        }
-        return n < 3 ? Vec3d{} : LambertSum(poly, n, x) * sign_[q];
+        if (!cut_[q])
+            return LambertSum(v, nv, x) * sign_[q];
+        // Each clip at most doubles the vertex count: 2 nv, then 4 nv (clip_ holds 6 x the
+        // light's or a triangle's count).
+        Vec3d* poly = clip_.data();
+        Vec3d* both = clip_.data() + 2 * nv;
+        const int n = ClipToHalfSpace(v, nv, x, Vec3d(rp.horizon), poly);
+        if (n < 3)
+            return Vec3d{};
+        if (Dot(rp.face, rp.face) == 0)
+            return LambertSum(poly, n, x) * sign_[q];
+        const int m = ClipToHalfSpace(poly, n, x, Vec3d(rp.face), both);
+        if (m < 3)
+            return Vec3d{};
+        return LambertSum(both, m, x) * sign_[q];
     }
 
     Vec3f Origin(uint32_t q) const {
@@ -422,10 +414,9 @@ private:
     std::vector<double> sign_;
     std::vector<uint8_t> cut_;
     mutable std::vector<uint8_t> height_;  // HeightClass per point and grid vertex
-    // ClosedForm's clipped polygons, kept here: arrays of Vec3d on its stack were zeroed on
-    // every call (rep stos, a seventh of RefineCells' own time on the bunny).
-    mutable std::array<Vec3d, 18> clip_;
-    mutable std::vector<Vec3d> whole_[2];  // WholeLight's clipped light
+    // AbovePlanes' clipped polygons, kept here: arrays of Vec3d on ClosedForm's stack were
+    // zeroed on every call (rep stos, a seventh of RefineCells' own time on the bunny).
+    mutable std::vector<Vec3d> clip_;
     std::vector<Cell> visible_, hidden_;   // uniform cells (hidden_: and wholly below)
     std::vector<uint8_t> complement_;      // per point: E = whole light - the others (Run)
     SegmentBatch batch_;

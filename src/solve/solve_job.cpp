@@ -24,6 +24,7 @@
 #include "stream/tile.h"
 
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -244,9 +245,9 @@ void ReadGeometry(const std::string& dir, GeometryCache* cache, std::vector<Solv
             while ((1u << level) < tile.meta.resolution)
                 ++level;
             sc.max_level = level;
-            sc.emitter_level = -1;
-            for (int l = 0; (1u << l) <= tile.meta.emitter_resolution; ++l)
-                sc.emitter_level = l;
+            // A power of two or 0 (ReadTile checks it).
+            const uint32_t er = tile.meta.emitter_resolution;
+            sc.emitter_level = er ? std::countr_zero(er) : -1;
         }
     }
     if (cache)
