@@ -168,8 +168,8 @@ struct Pair {
 // A scan's hard edge with a normal per side was stitched as one surface: nefertiti's crown
 // showed 0.61 where the path tracer has 1.84 (bench/RESULTS.md, "Issue 14 (session 8)").
 bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
-            const Vec3f& y1) {
-    return Dot(fx, fy) < kFoldCos || Dot(Normalize(x0), Normalize(y0)) < kFoldCos ||
+            const Vec3f& y1, float face_cos) {
+    return Dot(fx, fy) < face_cos || Dot(Normalize(x0), Normalize(y0)) < kFoldCos ||
            Dot(Normalize(x1), Normalize(y1)) < kFoldCos;
 }
 
@@ -465,7 +465,7 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
             if (waiting->slot == met[j].slot)
                 continue;  // a split vertex inside one chart
             const Side &x = side(*waiting), &y = side(met[j]);
-            if (Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1)) {
+            if (Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1, kStitchFoldCos)) {
                 pairs.push_back({*waiting, met[j], true});
                 if (met[j].slot == self)
                     ++st.fold_edges;

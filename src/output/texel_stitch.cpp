@@ -363,7 +363,8 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
             for (size_t i = 0; i < part.sides.size(); ++i)
                 pairing.Add(c, part.keys[i], part.sides[i],
                             [&](const EdgeSide& x, const EdgeSide& y) {
-                                if (!Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1))
+                                if (!Crease(x.normal, y.normal, x.n0, y.n0, x.n1, y.n1,
+                                            kStitchFoldCos))
                                     add_pair(x, y);
                             });
             pairing.Done(c);
