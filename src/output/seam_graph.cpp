@@ -168,9 +168,9 @@ struct Pair {
 // A scan's hard edge with a normal per side was stitched as one surface: nefertiti's crown
 // showed 0.61 where the path tracer has 1.84 (bench/RESULTS.md, "Issue 14 (session 8)").
 bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
-            const Vec3f& y1, float fold_cos) {
-    return Dot(fx, fy) < fold_cos || Dot(Normalize(x0), Normalize(y0)) < fold_cos ||
-           Dot(Normalize(x1), Normalize(y1)) < fold_cos;
+            const Vec3f& y1, float face_cos) {
+    return Dot(fx, fy) < face_cos || Dot(Normalize(x0), Normalize(y0)) < kNormalCreaseCos ||
+           Dot(Normalize(x1), Normalize(y1)) < kNormalCreaseCos;
 }
 
 std::vector<OutlineEdge> OutlineEdges(const stream::ChartTile& tile, uint64_t vertex_count) {
@@ -548,7 +548,7 @@ SeamStitcher::Parts SeamStitcher::BuildParts(const BakeView& view, uint32_t c,
         // One shading normal on both sides too, unless the copies disagree as at a
         // crease (ingest keeps each side's own normal there).
         const Vec3f shared(Normalize(sum.normal));
-        if (Dot(shared, Normalize(end.normal)) >= kStitchFoldCos)
+        if (Dot(shared, Normalize(end.normal)) >= kNormalCreaseCos)
             normals.push_back({end.v, shared});
     }
     std::sort(normals.begin(), normals.end(),

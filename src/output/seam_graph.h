@@ -2,8 +2,8 @@
 // (seam_stitch.h). A chart-border edge is a mesh edge on the outline of two charts,
 // recognized by the same pair of global input vertex ids in both tiles (as the seam metric,
 // seams.h, finds it). Creases (faces, or the charts' shading normals at either end, more than
-// 30 degrees apart) keep each side's own field, since E and B differ there in any correct
-// solution: they enter with zero correction. Mesh borders are left alone.
+// 30 degrees apart: Crease, kStitchFoldCos) keep each side's own field, since E and B differ
+// there in any correct solution: they enter with zero correction. Mesh borders are left alone.
 //
 // The rule, as one pass over the tiles in chart order: each chart samples its own shown field
 // (continuous_field.h) at n + 1 points along every outline edge, n from the edge's 3D
@@ -66,25 +66,31 @@ Vec3f FaceNormal(const stream::ChartTile& tile, uint32_t triangle);
 // (nor stitched: kStitchFoldCos below).
 constexpr float kFoldCos = 0.7071f;
 
-// The stitch (the field's and the light map's) leaves borders whose faces, or the two charts'
-// shading normals, are more than 30 degrees apart, though the seam metric still measures
-// those under 45. Ingest keeps each chart's own vertex normal where it is more than 30
-// degrees from the brick's (stream/chart_builder.cpp, kCreaseCos): a fold. Stitched from 30
-// to 45 degrees, such borders had their normals averaged back and their fields pulled toward
-// a neighbour facing elsewhere, while each chart's own field was the closer to the path
-// tracer beside them (lucy's point 0.7 texel from a 40-degree border: own +0.9 %, stitched
-// +17.6 %; another beside normals 31 degrees apart: own -1.4 %, stitched -26 %). At 30 the
-// point RMS of lucy fell by 0.104 and igea's by 0.047 points, the other scans and the
-// Cornell box moved by -0.003 to +0.0004 (bench/RESULTS.md, "Issue 13 (session 19)").
+// Shading normals more than 30 degrees apart: a crease of the mesh itself. Ingest keeps each
+// chart's own vertex normal where it is more than 30 degrees from the brick's
+// (stream/chart_builder.cpp, kCreaseCos), so B is discontinuous there in the path tracer as
+// in the bake: neither stitched nor measured. (Until session 19 the stitch averaged normals
+// up to 45 degrees apart back into one: a point of lucy's beside normals 31 degrees apart went
+// from -1.4 % on its own chart to -26 %.)
+constexpr float kNormalCreaseCos = 0.8660f;
+
+// The stitch (the field's and the light map's) also leaves borders whose faces are more than
+// 30 degrees apart, which the seam metric still measures (under 45): each chart's own field
+// was the closer to the path tracer beside them (lucy's point 0.7 texel from a 40-degree
+// border: own +0.9 %, stitched +17.6 % toward a neighbour facing the key light more). With
+// both rules the point RMS of lucy fell by 0.104 and igea's by 0.047 points, the other scans
+// and the Cornell box moved by -0.003 to +0.0004, lucy's pictures by 0.06-0.15 points
+// (bench/RESULTS.md, "Issue 13 (session 19)").
 constexpr float kStitchFoldCos = 0.8660f;
 
-// A crease between two charts' sides of a border edge: their faces (unit normals fx, fy), or
-// their shading normals at either end (x0/y0 at g0, x1/y1 at g1), with a cosine under
-// fold_cos. Each chart's E holds the light above its own horizon and B follows its own
-// normal, so the sides differ there in any correct solution: neither the field's stitch nor
-// the light map's pulls them together (they pass kStitchFoldCos; the metric kFoldCos).
+// A crease between two charts' sides of a border edge: their faces (unit normals fx, fy) with
+// a cosine under face_cos, or their shading normals at either end (x0/y0 at g0, x1/y1 at g1)
+// more than 30 degrees apart. Each chart's E holds the light above its own horizon and B
+// follows its own normal, so the sides differ there in any correct solution: neither the
+// field's stitch nor the light map's pulls them together (they pass kStitchFoldCos; the
+// metric kFoldCos).
 bool Crease(const Vec3f& fx, const Vec3f& fy, const Vec3f& x0, const Vec3f& y0, const Vec3f& x1,
-            const Vec3f& y1, float fold_cos = kFoldCos);
+            const Vec3f& y1, float face_cos = kFoldCos);
 
 // Every chart's neighbours, ascending (CSR: chart a's are list[start[a]..start[a + 1])): the
 // charts whose boxes touch its box, so every chart sharing a vertex with it, and maybe a few
