@@ -21,19 +21,25 @@ void ContinuousField::Eval(double u, double v, float* out) const {
     v = std::clamp(v, 0.0, 1.0);
     const double u0 = std::max(0.0, u - delta_), u1 = std::min(1.0, u + delta_);
     const double v0 = std::max(0.0, v - delta_), v1 = std::min(1.0, v + delta_);
-    // The leaves at the box's corners cover it (each is at least 2 delta wide).
+    // The leaves at the box's corners cover it (each is at least 2 delta wide). A corner
+    // in a leaf already found is not looked up again (the same leaf LeafAt would give).
     std::array<size_t, 4> leaves{};
     int count = 0;
+    double ls, lt;  // a leaf's node-local coordinates
     for (const double cv : {v0, v1})
         for (const double cu : {u0, u1}) {
-            double s, t;
-            const size_t n = field_.LeafAt(cu, cv, &s, &t);
-            if (std::find(leaves.begin(), leaves.begin() + count, n) == leaves.begin() + count)
-                leaves[size_t(count++)] = n;
+            bool found = false;
+            for (int k = 0; k < count && !found; ++k)
+                found = field_.InLeaf(leaves[size_t(k)], cu, cv, &ls, &lt);
+            if (!found)
+                leaves[size_t(count++)] = field_.LeafAt(cu, cv, &ls, &lt);
         }
     const int blocks = field_.blocks();
     if (count == 1) {  // inside one leaf: its own fit, as ChartField::EvalValue gives it
-        field_.EvalValue(u, v, out);
+        if (field_.InLeaf(leaves[0], u, v, &ls, &lt))  // (u, v) lies between the corners
+            solve::EvalCoeffs(field_.order(), field_.value(leaves[0]), blocks, ls, lt, out);
+        else
+            field_.EvalValue(u, v, out);
         return;
     }
     std::fill(out, out + blocks, 0.f);
