@@ -3,7 +3,6 @@
 #include "core/check.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <utility>
 
@@ -150,22 +149,6 @@ size_t ChartField::LeafAt(double u, double v, double* s, double* t) const {
     *s = std::clamp(x, 0.0, 1.0);
     *t = std::clamp(y, 0.0, 1.0);
     return n;
-}
-
-bool ChartField::InLeaf(size_t n, double u, double v, double* s, double* t) const {
-    const QuadNode& q = nodes_[n];
-    if (!q.leaf())
-        return false;
-    // LeafAt's steps x -> 2x - q are exact (Sterbenz), so at level k its x is
-    // u 2^k - floor(u 2^k) and its path is floor(u 2^k)'s digits (u = 1: the last square).
-    const double scale = double(1u << q.level), last = scale - 1;
-    const double x = std::clamp(u, 0.0, 1.0) * scale, y = std::clamp(v, 0.0, 1.0) * scale;
-    const double i = std::min(std::floor(x), last), j = std::min(std::floor(y), last);
-    if (i != double(q.i) || j != double(q.j))
-        return false;
-    *s = std::clamp(x - i, 0.0, 1.0);
-    *t = std::clamp(y - j, 0.0, 1.0);
-    return true;
 }
 
 void ChartField::EvalValue(double u, double v, float* out) const {

@@ -73,9 +73,6 @@ public:
 
     // The leaf containing chart point (u, v) and the point's node-local coordinates.
     size_t LeafAt(double u, double v, double* s, double* t) const;
-    // True, with LeafAt's s and t, when leaf n is LeafAt(u, v): a test of n's square
-    // instead of a descent from the root, for a point near one already located.
-    bool InLeaf(size_t n, double u, double v, double* s, double* t) const;
     // Evaluates value / unshot at (u, v) into out[blocks].
     void EvalValue(double u, double v, float* out) const;
     void EvalUnshot(double u, double v, float* out) const;

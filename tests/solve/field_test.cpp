@@ -5,9 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <vector>
-
 namespace mebake::solve {
 namespace {
 
@@ -75,51 +72,6 @@ TEST(ChartField, ValuesOnlyFieldEvaluatesAndSubdivides) {
     values.pending(size_t(first))[0] = 5;
     values.PushPending();
     EXPECT_FALSE(values.has_unshot());
-}
-
-// InLeaf answers exactly as LeafAt's descent: the same leaf and the same s, t to the bit,
-// for points on node borders, at 0 and 1, just either side of a border and at random,
-// on a tree refined unevenly down to level 24; and false for every other leaf.
-TEST(ChartField, InLeafIsLeafAtsAnswer) {
-    ChartField f(0, 1);
-    size_t n = 0;
-    for (int level = 0; level < 24; ++level)  // deep towards (1/3, 2/3)
-        n = size_t(f.Subdivide(n)) + (level % 2 ? 2 : 1);
-    f.Subdivide(3);
-    f.Subdivide(f.node(3).first_child + 3);
-    std::vector<double> at = {0, 1, 0.5, 0.25, 0.75, 1.0 / 3, 2.0 / 3, 0.999999999};
-    for (double x : {0.5, 0.25, 0.75, 1.0 / 3, 2.0 / 3, 1.0}) {  // a few ulps either side
-        double below = x, above = x;
-        for (int k = 0; k < 3; ++k) {
-            at.push_back(below = std::nextafter(below, 0.0));
-            at.push_back(above = std::nextafter(above, 2.0));
-        }
-    }
-    uint64_t rng = 12345;
-    for (int k = 0; k < 400; ++k) {
-        rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-        at.push_back(double(rng >> 11) * 0x1p-53);
-    }
-    at.push_back(1.0 / 3 + 0x1p-30);  // inside the deep leaves
-    at.push_back(-0.5);               // clamped, as LeafAt clamps
-    at.push_back(1.5);
-    int found = 0;
-    for (double u : at)
-        for (double v : at) {
-            double s, t;
-            const size_t leaf = f.LeafAt(u, v, &s, &t);
-            for (size_t m = 0; m < f.node_count(); ++m) {
-                double s2 = -1, t2 = -1;
-                const bool in = f.InLeaf(m, u, v, &s2, &t2);
-                ASSERT_EQ(in, m == leaf) << u << " " << v << " node " << m;
-                if (in) {
-                    EXPECT_EQ(s2, s) << u << " " << v;
-                    EXPECT_EQ(t2, t) << u << " " << v;
-                    ++found;
-                }
-            }
-        }
-    EXPECT_EQ(found, int(at.size() * at.size()));
 }
 
 }  // namespace
