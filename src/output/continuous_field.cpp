@@ -21,6 +21,21 @@ void ContinuousField::Eval(double u, double v, float* out) const {
     v = std::clamp(v, 0.0, 1.0);
     const double u0 = std::max(0.0, u - delta_), u1 = std::min(1.0, u + delta_);
     const double v0 = std::max(0.0, v - delta_), v1 = std::min(1.0, v + delta_);
+    const int blocks = field_.blocks();
+    // Most boxes lie in the leaf of their centre: then one descent does (below, the same
+    // answer from five). A leaf holds the points of its node's square, right and top edges
+    // excluded but on the chart's border (LeafAt's halving steps are exact); the square's
+    // corners (i, j) / 2^level are exact doubles.
+    {
+        double s, t;
+        const size_t n = field_.LeafAt(u, v, &s, &t);
+        const solve::QuadNode& q = field_.node(n);
+        const double hi_u = q.U(1), hi_v = q.V(1);
+        if (q.U(0) <= u0 && (u1 < hi_u || hi_u == 1) && q.V(0) <= v0 && (v1 < hi_v || hi_v == 1)) {
+            solve::EvalCoeffs(field_.order(), field_.value(n), blocks, s, t, out);
+            return;
+        }
+    }
     // The leaves at the box's corners cover it (each is at least 2 delta wide).
     std::array<size_t, 4> leaves{};
     int count = 0;
@@ -31,7 +46,6 @@ void ContinuousField::Eval(double u, double v, float* out) const {
             if (std::find(leaves.begin(), leaves.begin() + count, n) == leaves.begin() + count)
                 leaves[size_t(count++)] = n;
         }
-    const int blocks = field_.blocks();
     if (count == 1) {  // inside one leaf: its own fit, as ChartField::EvalValue gives it
         field_.EvalValue(u, v, out);
         return;

@@ -170,16 +170,32 @@ double ControlPoint(int g, int a) {
     return g == 1 ? 0.5 : double(a) / double(g - 1);
 }
 
-void EvalCoeffs(int order, const float* coeffs, int count, double s, double t, float* out) {
-    const int nn = NumCoeffs(order);
-    double phi[kMaxCoeffs];
-    EvalBasis(order, s, t, phi);
+namespace {
+
+// EvalCoeffs' sums with the coefficient count known at compile time (unrolled: the same
+// sums in the same order, so the same bits, at a fraction of the loop's cost).
+template <int N>
+void SumBlocks(const float* coeffs, int count, const double* phi, float* out) {
     for (int b = 0; b < count; ++b) {
-        const float* c = coeffs + b * nn;
+        const float* c = coeffs + b * N;
         double v = 0;
-        for (int k = 0; k < nn; ++k)
+        for (int k = 0; k < N; ++k)
             v += c[k] * phi[k];
         out[b] = float(v);
+    }
+}
+
+}  // namespace
+
+void EvalCoeffs(int order, const float* coeffs, int count, double s, double t, float* out) {
+    static_assert(kMaxOrder == 3);
+    double phi[kMaxCoeffs];
+    EvalBasis(order, s, t, phi);
+    switch (NumCoeffs(order)) {
+    case 1: return SumBlocks<1>(coeffs, count, phi, out);
+    case 4: return SumBlocks<4>(coeffs, count, phi, out);
+    case 9: return SumBlocks<9>(coeffs, count, phi, out);
+    default: return SumBlocks<16>(coeffs, count, phi, out);
     }
 }
 

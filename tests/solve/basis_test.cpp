@@ -163,6 +163,31 @@ TEST(Basis, EvalCoeffsMatchesTensorGridAndBasis) {
     }
 }
 
+// EvalCoeffs' unrolled sums are the plain loop's, to the bit, for every order and block
+// count (the light map's bytes depend on it).
+TEST(Basis, EvalCoeffsIsThePlainSumToTheBit) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> at(0, 1);
+    for (int order = 0; order <= kMaxOrder; ++order)
+        for (int count : {1, 3, 9}) {
+            const int nn = NumCoeffs(order);
+            const auto c = RandomCoeffs(order, count, rng);
+            for (int p = 0; p < 50; ++p) {
+                const double s = at(rng), t = at(rng);
+                float out[9];
+                EvalCoeffs(order, c.data(), count, s, t, out);
+                double phi[kMaxCoeffs];
+                EvalBasis(order, s, t, phi);
+                for (int b = 0; b < count; ++b) {
+                    double v = 0;
+                    for (int k = 0; k < nn; ++k)
+                        v += c[size_t(b * nn + k)] * phi[k];
+                    EXPECT_EQ(out[b], float(v)) << order << " " << count << " " << b;
+                }
+            }
+        }
+}
+
 TEST(Basis, ControlGridErrorIsZeroForRepresentableFunctions) {
     std::mt19937 rng(4);
     for (int order = 0; order <= kMaxOrder; ++order) {
