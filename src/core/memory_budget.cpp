@@ -46,10 +46,6 @@ uint64_t MemoryBudget::StitchRows() const {
     return std::min<uint64_t>(total_ / 16, 64 * kMiB);
 }
 
-uint64_t MemoryBudget::ExportFields() const {
-    return std::min<uint64_t>(total_ / 16, 64 * kMiB);
-}
-
 std::vector<MemoryShare> MemoryBudget::Shares() const {
     return {{"ingest.spill_cache", SpillCache(), "min(1/8, 12 MiB)"},
             {"ingest.binning_cache", BinningCache(), "min(1/8, 64 MiB, 4x spilled data)"},
@@ -60,8 +56,7 @@ std::vector<MemoryShare> MemoryBudget::Shares() const {
             {"solve.coefficient_pools", CoefficientPools(), "min(1/16, 64 MiB) beyond pinned charts"},
             {"export.vertex_colour_cache", ExportCache(), "min(1/16, 64 MiB) per array"},
             {"export.stitch_cache", StitchCache(), "min(1/16, 4 MiB)"},
-            {"export.stitch_rows", StitchRows(), "min(1/16, 64 MiB)"},
-            {"export.fields", ExportFields(), "min(1/16, 64 MiB)"}};
+            {"export.stitch_rows", StitchRows(), "min(1/16, 64 MiB)"}};
 }
 
 void ReturnFreedHeap() {

@@ -70,11 +70,6 @@ public:
     // vectors fit too; past it the samples are read from a temporary file by every CG pass
     // and the channels are solved in turn (the same texels either way).
     uint64_t StitchRows() const;
-    // Export: the charts' fields kept between the passes that read them all (texel stitch,
-    // light map, vertex colours, seam metric), first read first kept, none evicted: each
-    // pass walks the charts in order, so an LRU smaller than the fields would miss on every
-    // chart. A miss reads solve/solution.bin again (time, never bytes).
-    uint64_t ExportFields() const;
 
     std::vector<MemoryShare> Shares() const;
 

@@ -11,22 +11,8 @@
 
 namespace mebake::output {
 
-std::shared_ptr<const ChartField> FieldCache::Find(uint32_t c) const {
-    const std::lock_guard lock(mutex_);
-    return fields_[c];
-}
-
-void FieldCache::Keep(uint32_t c, const std::shared_ptr<const ChartField>& field) {
-    const size_t bytes = field->MemoryBytes();
-    const std::lock_guard lock(mutex_);
-    if (fields_[c] || bytes_ + bytes > cap_)
-        return;
-    fields_[c] = field;
-    bytes_ += bytes;
-}
-
 BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching stitching,
-                      size_t stitch_cache_bytes, size_t field_cache_bytes) {
+                      size_t stitch_cache_bytes) {
     BakeView v;
     v.dir = dir;
     v.manifest = stream::ReadManifest(dir);
@@ -50,8 +36,6 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching
         charts = v.solution_reader->chart_count();
         if (v.solution_reader->blocks() != (v.solution.radiosity ? 3 : 9))
             blocks = v.solution_reader->blocks();
-        if (field_cache_bytes > 0)
-            v.field_cache = std::make_shared<FieldCache>(charts, field_cache_bytes);
     }
     if (charts != v.manifest.charts.size())
         CorruptError({sol}, "{} charts solved but the manifest lists {}", charts,
@@ -67,15 +51,8 @@ BakeView OpenBakeView(const std::string& dir, FieldLoading fields, SeamStitching
 }
 
 std::shared_ptr<const ChartField> BakeView::Field(uint32_t c) const {
-    if (solution_reader) {
-        if (field_cache)
-            if (auto kept = field_cache->Find(c))
-                return kept;
-        auto field = std::make_shared<const ChartField>(solution_reader->Read(c));
-        if (field_cache)
-            field_cache->Keep(c, field);
-        return field;
-    }
+    if (solution_reader)
+        return std::make_shared<const ChartField>(solution_reader->Read(c));
     CHECK_LT(c, solution.fields.size());
     // Not owning: the view holds the field.
     return std::shared_ptr<const ChartField>(std::shared_ptr<const ChartField>(),

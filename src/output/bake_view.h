@@ -26,7 +26,6 @@
 
 #include <algorithm>
 #include <memory>
-#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,21 +41,6 @@ using solve::Scene;
 using solve::Solution;
 using solve::SolutionReader;
 
-// Fields read on demand, kept while they fit a byte cap (first read, first kept; none is
-// evicted). Thread-safe.
-class FieldCache {
-public:
-    explicit FieldCache(size_t chart_count, size_t cap_bytes)
-        : fields_(chart_count), cap_(cap_bytes) {}
-    std::shared_ptr<const ChartField> Find(uint32_t c) const;
-    void Keep(uint32_t c, const std::shared_ptr<const ChartField>& field);
-
-private:
-    mutable std::mutex mutex_;
-    std::vector<std::shared_ptr<const ChartField>> fields_;
-    size_t cap_ = 0, bytes_ = 0;
-};
-
 struct BakeView {
     std::string dir;
     stream::Manifest manifest;
@@ -64,12 +48,11 @@ struct BakeView {
     Solution solution;  // fields empty when opened with FieldLoading::OnDemand
     std::shared_ptr<const SolutionReader> solution_reader;  // OnDemand only
     std::shared_ptr<const SeamStitcher> stitcher;  // seam_graph.h; null: not stitched
-    std::shared_ptr<FieldCache> field_cache;       // OnDemand: fields kept between passes
 
     size_t chart_count() const { return manifest.charts.size(); }
     std::string TilePath(uint32_t chart) const { return stream::TilePath(dir, chart); }
     // Chart c's field: solution.fields[c], or read from solve/solution.bin on demand (then
-    // the pointer owns it; kept in field_cache while it fits). Thread-safe.
+    // the pointer owns it). Thread-safe.
     std::shared_ptr<const ChartField> Field(uint32_t c) const;
     bool stitched() const { return stitcher != nullptr; }
     // Chart c's stitch data, built on demand from the tiles around it (seam_graph.h), or
@@ -89,14 +72,12 @@ enum class SeamStitching { On, Off };
 // Reads the manifest, solve/solution.bin and the scene the solve used (solve/scene.json
 // when the solve had one, else the inputs' materials and the default rig). The stitch data
 // is built chart by chart when asked for; `stitch_cache_bytes` caps the charts' sampled
-// borders kept between requests, `field_cache_bytes` the fields read on demand kept for the
-// next pass (both change the time, not the bytes). Throws
+// borders kept between requests (it changes the time, not the bytes). Throws
 // Error(Usage) when the directory is not ingested or not solved, Error(Corrupt) naming the
 // file when the solution does not match the charts.
 BakeView OpenBakeView(const std::string& dir, FieldLoading fields = FieldLoading::All,
                       SeamStitching stitching = SeamStitching::On,
-                      size_t stitch_cache_bytes = MemoryBudget(uint64_t(1) << 30).StitchCache(),
-                      size_t field_cache_bytes = 0);
+                      size_t stitch_cache_bytes = MemoryBudget(uint64_t(1) << 30).StitchCache());
 
 // The resolution of every chart from the manifest, validated (Error(Corrupt) otherwise).
 std::vector<uint32_t> ChartResolutions(const BakeView& view);

@@ -14,8 +14,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -271,32 +269,6 @@ TEST_F(ExportTest, VertexColorsInInputOrder) {
     const Vec3f b0 = solve::testing::ExpectedB(opt_, 0, 0) / kPi * 0.25f;
     for (int k = 0; k < 3; ++k)
         EXPECT_NEAR(f.color[0][k], b0[k], 1e-5);
-}
-
-// Fields read on demand are kept while they fit the cache's cap (the same values as a
-// fresh read), never beyond it, and not at all without a cache.
-TEST_F(ExportTest, FieldsReadOnDemandAreKeptWhileTheyFit) {
-    const size_t stitch = MemoryBudget(uint64_t(1) << 30).StitchCache();
-    const BakeView none = OpenBakeView(dir_, FieldLoading::OnDemand, SeamStitching::Off, stitch);
-    EXPECT_EQ(none.field_cache, nullptr);
-    EXPECT_NE(none.Field(0), none.Field(0)) << "read again without a cache";
-    const size_t one = none.Field(0)->MemoryBytes();
-    ASSERT_EQ(none.Field(1)->MemoryBytes(), one);  // the fixture's two charts are alike
-
-    const BakeView fits_one =
-        OpenBakeView(dir_, FieldLoading::OnDemand, SeamStitching::Off, stitch, one + one / 2);
-    const auto first = fits_one.Field(0);
-    EXPECT_EQ(fits_one.Field(0), first) << "kept";
-    EXPECT_NE(fits_one.Field(1), fits_one.Field(1)) << "over the cap: read each time";
-    const auto fresh = none.Field(0);
-    ASSERT_EQ(first->values().size(), fresh->values().size());
-    EXPECT_TRUE(std::equal(first->values().begin(), first->values().end(),
-                           fresh->values().begin()));
-
-    const BakeView fits_all =
-        OpenBakeView(dir_, FieldLoading::OnDemand, SeamStitching::Off, stitch, 2 * one);
-    EXPECT_EQ(fits_all.Field(1), fits_all.Field(1));
-    EXPECT_EQ(fits_all.Field(0), fits_all.Field(0));
 }
 
 TEST_F(ExportTest, MissingVertexSpillIsAnError) {
