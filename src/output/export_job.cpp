@@ -147,8 +147,7 @@ void RunExportJob(const ExportJobOptions& c) {
     // Fields are read a chart at a time: memory follows the charts being written.
     BakeView view = OpenBakeView(c.dir, FieldLoading::OnDemand,
                                  c.stitch ? SeamStitching::On : SeamStitching::Off,
-                                 size_t(MemoryBudget(c.memory).StitchCache()),
-                                 size_t(MemoryBudget(c.memory).ExportFields()));
+                                 size_t(MemoryBudget(c.memory).StitchCache()));
     const Atlas atlas = PackAtlas(ChartResolutions(view), c.atlas);
     CheckFreshOutputs(c, atlas);
     spdlog::info("{} charts in {} atlas page{} ({} texels, {:.1f}% filled)", view.chart_count(),
