@@ -77,6 +77,10 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
                         PolygonPoint(l.vertices, t, double(a) / l.grid, double(b) / l.grid);
                     l.grid_pos.push_back(p);
                     l.grid_target.push_back(Vec3f(p + (centre - p) * 0.01));
+                    const Vec3f& end = l.grid_target.back();
+                    if (l.centre_t < 0 && end.x == l.classify.back().x &&
+                        end.y == l.classify.back().y && end.z == l.classify.back().z)
+                        l.centre_t = int(t), l.centre_a = a, l.centre_b = b;
                 }
             }
         }
@@ -176,7 +180,9 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
     std::vector<Vec3d> pen_e;
     std::vector<uint8_t> pen_states;
-    Penumbra(l, points, penumbra, classified, prior_grid, &pen_e, grid_out ? &pen_states : nullptr);
+    const bool centre_traced = !prior_cls || prior_cls[nk - 1] == 0;
+    Penumbra(l, points, penumbra, classified, centre_traced, prior_grid, &pen_e,
+             grid_out ? &pen_states : nullptr);
     auto add = [&](size_t p, const Vec3d& e) {
         for (int c = 0; c < 3; ++c)
             for (int k = 0; k < 3; ++k)

@@ -148,6 +148,10 @@ private:
         int grid = 8;
         std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
         std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)
+        // The grid vertex (fan triangle, a, b) whose ray end is the classification's centre
+        // to the bit (a parallelogram's centre, on the diagonal), or t < 0: its penumbra ray
+        // would be the centre's classification ray again (Penumbra reuses that answer).
+        int centre_t = -1, centre_a = 0, centre_b = 0;
     };
     void EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
                        std::span<const size_t> which, const uint8_t* prior_cls,
@@ -173,9 +177,12 @@ private:
                                          bool lights_only = false,
                                          std::span<const uint8_t> skip = {}) const;
     class PenumbraPass;  // penumbra.cpp
+    // centre_traced: every point's centre state in `classified` is its own ray's answer
+    // (not taken from a prior).
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                  const uint8_t* prior, std::vector<Vec3d>* e, std::vector<uint8_t>* states) const;
+                  bool centre_traced, const uint8_t* prior, std::vector<Vec3d>* e,
+                  std::vector<uint8_t>* states) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;
