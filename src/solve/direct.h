@@ -101,9 +101,17 @@ public:
     // known (empty, or one state per light): 2 = the light is taken as fully visible at
     // every point (closed form, no ray), 3 = as hidden (no contribution, no ray), 0 = traced
     // as usual. The multi-emitter pass (extremal_boundary.h) supplies it.
+    // inherited (empty, or every light's classification then grid vertex states, as
+    // ProbeAgreement returns): states taken as known at the probes not found in the cache.
     void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
                   size_t probes = 0, ProbeCache* cache = nullptr,
-                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {}) const;
+                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {},
+                  std::span<const uint8_t> inherited = {}) const;
+    // Where the cached probes `keys` agree: per light, its classification targets' then its
+    // grid vertices' states where every probe has the same one, 0 elsewhere (Evaluate's
+    // `inherited`). Empty if one of them is not in the cache.
+    std::vector<uint8_t> ProbeAgreement(const ProbeCache& cache,
+                                        std::span<const ProbeKey> keys) const;
     bool has_lights() const { return !lights_.empty(); }
     size_t light_count() const { return lights_.size(); }
     // Per point, light `light` as seen with its classification rays only (no penumbra
@@ -159,7 +167,7 @@ private:
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
     void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
                    ProbeCache* cache, std::span<const ProbeKey> keys,
-                   std::span<const uint8_t> known) const;
+                   std::span<const uint8_t> known, std::span<const uint8_t> inherited) const;
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
