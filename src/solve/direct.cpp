@@ -77,6 +77,10 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
                         PolygonPoint(l.vertices, t, double(a) / l.grid, double(b) / l.grid);
                     l.grid_pos.push_back(p);
                     l.grid_target.push_back(Vec3f(p + (centre - p) * 0.01));
+                    const Vec3f& end = l.grid_target.back();
+                    if (l.centre_t < 0 && end.x == l.classify.back().x &&
+                        end.y == l.classify.back().y && end.z == l.classify.back().z)
+                        l.centre_t = int(t), l.centre_a = a, l.centre_b = b;
                 }
             }
         }
@@ -176,7 +180,9 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
     std::vector<Vec3d> pen_e;
     std::vector<uint8_t> pen_states;
-    Penumbra(l, points, penumbra, classified, prior_grid, &pen_e, grid_out ? &pen_states : nullptr);
+    const bool centre_traced = !prior_cls || prior_cls[nk - 1] == 0;
+    Penumbra(l, points, penumbra, classified, centre_traced, prior_grid, &pen_e,
+             grid_out ? &pen_states : nullptr);
     auto add = [&](size_t p, const Vec3d& e) {
         for (int c = 0; c < 3; ++c)
             for (int k = 0; k < 3; ++k)
@@ -227,7 +233,8 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
 
 void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts,
                            size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
-                           std::span<const uint8_t> known) const {
+                           std::span<const uint8_t> known,
+                           std::span<const uint8_t> inherited) const {
     CHECK_EQ(out.size(), points.size() * 9);
     if (!known.empty())
         CHECK_EQ(known.size(), lights_.size());
@@ -248,7 +255,7 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     }
     const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky, found);
     if (parts & kLights)
-        AddLights(on_surface, out, probes, cache, keys, known);
+        AddLights(on_surface, out, probes, cache, keys, known, inherited);
     if (with_sky)
         AddSky(on_surface, out);
 }
@@ -380,9 +387,27 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
 // Every light at the points. With probes (the first `probes` points surround one small
 // patch), the probes are evaluated first, or found in the cache; where all of them agree
 // on a light vertex's visibility, the other points take it without a ray.
+std::vector<uint8_t> DirectLight::ProbeAgreement(const ProbeCache& cache,
+                                                 std::span<const ProbeKey> keys) const {
+    std::vector<uint8_t> agree;
+    for (const ProbeKey& key : keys) {
+        auto it = cache.map_.find(key);
+        if (it == cache.map_.end())
+            return {};
+        const std::vector<uint8_t>& st = it->second.states;
+        if (agree.empty())
+            agree = st;
+        for (size_t k = 0; k < agree.size(); ++k)
+            if (st[k] != agree[k])
+                agree[k] = 0;
+    }
+    return agree;
+}
+
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
                             size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
-                            std::span<const uint8_t> known) const {
+                            std::span<const uint8_t> known,
+                            std::span<const uint8_t> inherited) const {
     const bool coherent = probes > 0 && probes < points.size();
     // Probes found in the cache, and records for the others (filled light by light).
     std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
@@ -440,7 +465,8 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
                 uncached.push_back(q);
         std::vector<uint8_t> cls, grid;
         probe_e.assign(out.size(), 0.f);
-        EvaluateLight(l, points, uncached, nullptr, nullptr, probe_e, &cls, &grid);
+        const uint8_t* inh = inherited.empty() ? nullptr : &inherited[state_at];
+        EvaluateLight(l, points, uncached, inh, inh ? inh + nk : nullptr, probe_e, &cls, &grid);
         // Every probe's states (nk then nv), cached or new; E added to out.
         std::vector<uint8_t> st(probes * (nk + nv));
         for (size_t q = 0, t = 0; q < probes; ++q) {

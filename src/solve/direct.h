@@ -101,9 +101,17 @@ public:
     // known (empty, or one state per light): 2 = the light is taken as fully visible at
     // every point (closed form, no ray), 3 = as hidden (no contribution, no ray), 0 = traced
     // as usual. The multi-emitter pass (extremal_boundary.h) supplies it.
+    // inherited (empty, or every light's classification then grid vertex states, as
+    // ProbeAgreement returns): states taken as known at the probes not found in the cache.
     void Evaluate(std::span<const ReceiverPoint> points, std::span<float> out, int parts = kAll,
                   size_t probes = 0, ProbeCache* cache = nullptr,
-                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {}) const;
+                  std::span<const ProbeKey> keys = {}, std::span<const uint8_t> known = {},
+                  std::span<const uint8_t> inherited = {}) const;
+    // Where the cached probes `keys` agree: per light, its classification targets' then its
+    // grid vertices' states where every probe has the same one, 0 elsewhere (Evaluate's
+    // `inherited`). Empty if one of them is not in the cache.
+    std::vector<uint8_t> ProbeAgreement(const ProbeCache& cache,
+                                        std::span<const ProbeKey> keys) const;
     bool has_lights() const { return !lights_.empty(); }
     size_t light_count() const { return lights_.size(); }
     // Per point, light `light` as seen with its classification rays only (no penumbra
@@ -148,6 +156,10 @@ private:
         int grid = 8;
         std::vector<Vec3d> grid_pos;     // [t][b][a] exact grid vertices, (grid+1)^2 per t
         std::vector<Vec3f> grid_target;  // the same pulled 1% toward the centre (ray ends)
+        // The grid vertex (fan triangle, a, b) whose ray end is the classification's centre
+        // to the bit (a parallelogram's centre, on the diagonal), or t < 0: its penumbra ray
+        // would be the centre's classification ray again (Penumbra reuses that answer).
+        int centre_t = -1, centre_a = 0, centre_b = 0;
     };
     void EvaluateLight(const Light& l, std::span<const ReceiverPoint> points,
                        std::span<const size_t> which, const uint8_t* prior_cls,
@@ -155,7 +167,7 @@ private:
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
     void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
                    ProbeCache* cache, std::span<const ProbeKey> keys,
-                   std::span<const uint8_t> known) const;
+                   std::span<const uint8_t> known, std::span<const uint8_t> inherited) const;
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
@@ -173,9 +185,12 @@ private:
                                          bool lights_only = false,
                                          std::span<const uint8_t> skip = {}) const;
     class PenumbraPass;  // penumbra.cpp
+    // centre_traced: every point's centre state in `classified` is its own ray's answer
+    // (not taken from a prior).
     void Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                   std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                  const uint8_t* prior, std::vector<Vec3d>* e, std::vector<uint8_t>* states) const;
+                  bool centre_traced, const uint8_t* prior, std::vector<Vec3d>* e,
+                  std::vector<uint8_t>* states) const;
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;

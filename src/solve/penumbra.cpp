@@ -62,8 +62,13 @@ public:
 
     // Vertex states from an earlier pass over the same points (or none), and the light's
     // own vertices from the classification rays.
-    void SeedStates(std::span<const uint8_t> classified, const uint8_t* prior) {
+    void SeedStates(std::span<const uint8_t> classified, bool centre_traced,
+                    const uint8_t* prior) {
         const size_t nk = l_.classify.size();
+        classified_ = classified;
+        centre_ = centre_traced && l_.centre_t >= 0
+                      ? VertexIndex(size_t(l_.centre_t), l_.centre_a, l_.centre_b)
+                      : nv_;
         for (size_t q = 0; q < penumbra_.size(); ++q) {
             uint8_t* st = &state_[q * nv_];
             if (prior)
@@ -246,16 +251,23 @@ private:
         }
     }
 
-    // One ray per corner of `cells` whose visibility is not known yet, in one batch.
+    // One ray per corner of `cells` whose visibility is not known yet, in one batch. The
+    // light's centre (centre_) was a classification ray's end already: the same segment,
+    // so its answer is taken (one ray fewer per penumbra point, the same states).
     void TraceCorners(const std::vector<Cell>& cells) {
         batch_.Clear();
         asked_.clear();
+        const size_t nk = l_.classify.size();
         for (const Cell& c : cells) {
             for (int k = 0; k < 3; ++k) {
                 const size_t v = CornerIndex(c, k);
                 uint8_t& st = state_[c.q * nv_ + v];
                 if (st != kUnknown || !Above(c.q, v))
                     continue;
+                if (v == centre_) {
+                    st = classified_[c.q * nk + nk - 1] ? kHidden : kVisible;
+                    continue;
+                }
                 st = kRequested;
                 asked_.push_back({c.q, uint32_t(v)});
                 batch_.AddSegment(Origin(c.q), l_.grid_target[v]);
@@ -411,6 +423,8 @@ private:
     const int g_;
     const size_t nt_, per_t_, nv_;
     std::vector<uint8_t> state_;
+    std::span<const uint8_t> classified_;  // per point: occluded[] of its classify rays
+    size_t centre_ = 0;                    // the centre's grid vertex (nv_: none reused)
     std::vector<double> sign_;
     std::vector<uint8_t> cut_;
     mutable std::vector<uint8_t> height_;  // HeightClass per point and grid vertex
@@ -425,13 +439,13 @@ private:
 
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
                            std::span<const size_t> penumbra, std::span<const uint8_t> classified,
-                           const uint8_t* prior, std::vector<Vec3d>* e,
+                           bool centre_traced, const uint8_t* prior, std::vector<Vec3d>* e,
                            std::vector<uint8_t>* states) const {
     e->assign(penumbra.size(), Vec3d{});
     if (penumbra.empty())
         return;
     PenumbraPass pass(*this, l, points, penumbra);
-    pass.SeedStates(classified, prior);
+    pass.SeedStates(classified, centre_traced, prior);
     pass.Run(e);
     if (states)
         *states = pass.TakeStates();

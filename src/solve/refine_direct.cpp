@@ -90,7 +90,8 @@ public:
         if (parts == DirectLight::kSky && direct_.has_sky())
             SkyShared(node, gl, n_gauss, probes);
         else if (parts != DirectLight::kSky && direct_.has_lights())
-            direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known);
+            direct_.Evaluate(all_pts_, e9_all_, parts, probes, &probe_cache_, keys_, known,
+                             light_inherited);
         ToGaussAndControl(n_gauss, n_ctrl, control);
     }
 
@@ -116,8 +117,26 @@ public:
         return direct_.ShadowEdgeAmong(edge_pts_);
     }
 
+    // The light states the probes of `node` (evaluated with its control grid) agreed on,
+    // from the cache (empty: it had no probes, or they are not all there).
+    std::vector<uint8_t> LightProbeAgreement(const QuadNode& node) const {
+        if (!use_probes || int(node.level) + kCoherentLevels < max_level_ || ng_ <= 1)
+            return {};
+        const int gl = std::min(finest_, int(node.level) + 2);
+        const uint32_t code = KnownCode(known);
+        std::vector<ProbeKey> keys;
+        for (int c : {0, gc_ - 1, gc_ * (gc_ - 1), gc_ * gc_ - 1}) {
+            const auto [u, v] = Uv(node, ng_ * ng_ + c, ng_ * ng_);
+            keys.push_back({std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl),
+                            code});
+        }
+        return direct_.ProbeAgreement(probe_cache_, keys);
+    }
+
     int order() const { return ng_ - 1; }
     std::vector<float> gauss_vals, ctrl_vals;
+    // The lights' states taken as known at new probes (light_probes_inherit; empty: none).
+    std::vector<uint8_t> light_inherited;
     // Per light, as DirectLight::Evaluate's `known` (empty: every light traced).
     std::vector<uint8_t> known;
     bool use_probes = true;  // false: no shared visibility and no cache (masked evaluations)
@@ -543,14 +562,25 @@ void Solver::FitDirectLights(uint32_t chart, DirectSampler& sampler, int min_lev
         for (int c = 3; c >= 0; --c)
             fit(size_t(first + c));
     }
+    // light_probes_inherit: a node one level above the depth cap passes what its probes
+    // agreed on to its children's new probes (its other points took it already), as the
+    // sky's children do (GatherSky). Only there: the children, at the cap, split no further
+    // but by fresh rays (kEdgeLevelsBelowCap), so an agreement is never passed on twice;
+    // passed down from every coherent level, lucy lost 0.25 points (bench/RESULTS.md,
+    // "Issue 13 (session 19)").
+    const bool inherit = opt_.settings.light_probes_inherit && !simplified;
     while (!queue.empty() && field.node_count() + 4 <= NodeBudget(charts_[chart])) {
         const size_t n = queue.top().node;
         queue.pop();
+        sampler.light_inherited.clear();
+        if (inherit && int(field.node(n).level) + 1 == max_level)
+            sampler.light_inherited = sampler.LightProbeAgreement(field.node(n));
         const int32_t first = field.Subdivide(n);
         for (int c = 0; c < 4; ++c)
             fit(size_t(first + c));
         CHECK(stack.empty());
     }
+    sampler.light_inherited.clear();
     field.Pull();
 }
 

@@ -171,6 +171,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
         InputError({scene_file}, "solver.near_emitter_split must be >= 0");
     o->sky_deep_floor = s.value("sky_deep_floor", o->sky_deep_floor);
     o->outline_face_inside = s.value("outline_face_inside", o->outline_face_inside);
+    o->light_probes_inherit = s.value("light_probes_inherit", o->light_probes_inherit);
     if (!(o->sky_deep_floor >= 0))
         InputError({scene_file}, "solver.sky_deep_floor must be >= 0");
     if (o->sky_extra_levels < 0 || o->sky_extra_levels > 8)

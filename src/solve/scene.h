@@ -87,6 +87,10 @@ struct SolverSettings {
     // edge just inside the outline, not whichever face a ray at the outline meets (false:
     // before session 16).
     bool outline_face_inside = true;
+    // The children of a node one level above the direct light's depth cap take, at their
+    // new probes, the light states its four probes agreed on, without a ray, as its other
+    // points did (Solver::FitDirectLights; false: before session 19, every probe traces).
+    bool light_probes_inherit = true;
 };
 
 struct Scene {

@@ -329,6 +329,46 @@ TEST(DirectLight, ProbesFoundInTheCacheAreNotMovedOntoTheSurface) {
     EXPECT_EQ(origin_rays(&known_e, lit), 5u);
 }
 
+// A split node's children's new probes may take the states the node's probes agreed on
+// (Evaluate's `inherited`, from ProbeAgreement): the lit patch's four probes agree on every
+// light target, so the same points with a new cache and that agreement trace no
+// classification ray and get the same E; told the light is hidden instead, they take it
+// as hidden. A key not in the cache gives no agreement.
+TEST(DirectLight, NewProbesTakeInheritedStatesWithoutRays) {
+    FoldScene f;
+    DirectLight direct(f.scene, f.scene.solver, f.vis, 1e-3f, 100, 0.05f);
+    const Vec3f n(0, 1, 0);
+    std::vector<ReceiverPoint> pts;
+    std::vector<ProbeKey> keys;
+    for (const auto& [x, z] : {std::pair{4.5f, -0.5f}, {5.5f, -0.5f}, {4.5f, 0.5f}, {5.5f, 0.5f},
+                               {5.f, 0.f}}) {
+        pts.push_back({{x, 0.f, z}, n, {x, 0.f, z}, n});
+        if (keys.size() < 4)
+            keys.push_back({std::bit_cast<uint32_t>(x), std::bit_cast<uint32_t>(z), 0, 0});
+    }
+    auto classify_rays = [&](ProbeCache* cache, std::span<const uint8_t> inherited,
+                             std::vector<float>* e) {
+        const uint64_t before = RaysByKind()[size_t(RayKind::kClassify)];
+        direct.Evaluate(pts, *e, DirectLight::kLights, 4, cache, keys, {}, inherited);
+        return RaysByKind()[size_t(RayKind::kClassify)] - before;
+    };
+    ProbeCache first_cache, second_cache, third_cache;
+    std::vector<float> first(pts.size() * 9), second(pts.size() * 9), hidden(pts.size() * 9);
+    EXPECT_EQ(classify_rays(&first_cache, {}, &first), 4u * 5u);  // the probes; the centre agrees
+    ASSERT_GT(first[1], 0.f);
+    const std::vector<uint8_t> agree = direct.ProbeAgreement(first_cache, keys);
+    ASSERT_FALSE(agree.empty());
+    EXPECT_TRUE(std::all_of(agree.begin(), agree.end(), [](uint8_t s) { return s == 2; }));
+    EXPECT_EQ(classify_rays(&second_cache, agree, &second), 0u);
+    EXPECT_EQ(first, second);
+    const std::vector<uint8_t> all_hidden(agree.size(), 3);
+    EXPECT_EQ(classify_rays(&third_cache, all_hidden, &hidden), 0u);
+    EXPECT_EQ(hidden[1], 0.f);
+    std::vector<ProbeKey> missing = keys;
+    missing[3].u += 1;
+    EXPECT_TRUE(direct.ProbeAgreement(first_cache, missing).empty());
+}
+
 // A chart's outline across a convex bend: face A (y = tA z, z < 0) is the chart's real
 // edge, face B (y = -tB z, z > 0) the neighbour's. A virtual point of A just past the
 // outline has its visibility point on the shared edge (here a hair on B's side, so the

@@ -117,5 +117,41 @@ TEST(Penumbra, MostlyVisibleLightIsTheWholeLightLessTheHiddenPart) {
     EXPECT_GT(partly, 3);
 }
 
+// The light's centre is a classification target, and on a parallelogram also the grid
+// vertex in the middle of the fan triangles' shared diagonal: the same segment from the
+// same origin. A point that sees the whole light but its centre (a small occluder in
+// between) is in penumbra; its grid takes the centre's state from the classification ray:
+// at the coarse level only the four edge midpoints are traced (before session 19 the
+// centre again: 5); at each of the next two levels the six cells around the centre are the
+// only mixed ones and their 12 new vertices are traced (7 per fan triangle, 2 of them on
+// the shared diagonal). The finest cells around it count a quarter hidden without a ray.
+TEST(Penumbra, LightCentreTakesItsClassificationRay) {
+    Scene scene;
+    PolygonLight light;
+    light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
+    light.radiance = {1, 1, 1};
+    scene.lights.push_back(light);
+    VisibilityScene vis;
+    const float h = 0.02f;  // hides the centre from the origin, no other grid vertex
+    std::vector<float> occ = {-h, 1, -h, h, 1, -h, h, 1, h, -h, 1, h};
+    std::vector<uint32_t> tris = {0, 1, 2, 0, 2, 3};
+    vis.AddTriangles(occ, tris, "occluder");
+    vis.Commit();
+    DirectLight direct(scene, scene.solver, vis, 1e-4f, 10);
+    const std::vector<ReceiverPoint> pts = {{{0, 0, 0}, {0, 1, 0}, {0, 0, 0}, {0, 1, 0}}};
+    std::vector<float> e(9);
+    const auto before = RaysByKind();
+    direct.Evaluate(pts, e, DirectLight::kLights);
+    const auto after = RaysByKind();
+    EXPECT_EQ(after[size_t(RayKind::kClassify)] - before[size_t(RayKind::kClassify)], 5u);
+    const uint64_t penumbra =
+        after[size_t(RayKind::kPenumbra)] - before[size_t(RayKind::kPenumbra)];
+    EXPECT_EQ(penumbra, 4u + 12u + 12u);
+    // Lit but for the finest cells around the centre, a quarter each of their 6 / 128.
+    const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(0, 0, 0), Vec3d(0, 1, 0));
+    EXPECT_LT(e[1], lit);
+    EXPECT_GT(e[1], 0.97 * lit);
+}
+
 }  // namespace
 }  // namespace mebake::solve

@@ -394,6 +394,64 @@ TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
     EXPECT_LT(worst, 0.03) << "penumbra error relative to the lit value";
 }
 
+// The square occluder's penumbra solved with and without light_probes_inherit (children
+// at the depth cap take their parent's probes' agreement at their new probes): fewer
+// light rays, the same umbra and a penumbra as close to the exact one.
+TEST(Solver, InheritedProbeStatesCostFewerRaysAndKeepThePenumbra) {
+    struct Result {
+        uint64_t rays;
+        double umbra, worst;
+    };
+    auto solve = [](bool inherit) {
+        TestScene ts;
+        ts.scene.per_input = {{Mat(0.0f)}};
+        PolygonLight light;
+        light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
+        light.radiance = {1, 1, 1};
+        ts.scene.lights.push_back(light);
+        ts.Add(MakePatch([](double u, double v) { return Vec3d(6 * u - 3, 0, 3 - 6 * v); }, 128,
+                         0, 6));
+        std::vector<float> occ = {-0.4f, 1, -0.4f, 0.4f, 1, -0.4f, 0.4f, 1, 0.4f, -0.4f, 1, 0.4f};
+        std::vector<uint32_t> occ_tris = {0, 1, 2, 0, 2, 3};
+        ts.vis.AddTriangles(occ, occ_tris, "occluder");
+        ts.vis.Commit();
+        SolveOptions opt;
+        opt.settings.max_bounces = 0;
+        opt.settings.light_probes_inherit = inherit;
+        Solver solver(ts.scene, ts.charts, ts.vis, opt);
+        const auto before = RaysByKind();
+        solver.Run();
+        const auto after = RaysByKind();
+        Result r{};
+        for (RayKind k : {RayKind::kClassify, RayKind::kPenumbra})
+            r.rays += after[size_t(k)] - before[size_t(k)];
+        auto at = [&](double x, double z) {
+            return Irradiance(solver, 0, (x + 3) / 6, (3 - z) / 6, Vec3d(0, 1, 0));
+        };
+        const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(1.6, 0, 0), Vec3d(0, 1, 0));
+        r.umbra = std::abs(at(0, 0)) / lit;
+        for (double x = 0.4; x <= 1.3; x += 0.05) {
+            const Vec3d p(x, 0, 0);
+            const double x0 = std::max(-0.5, x + 2 * (-0.4 - x)), x1 = std::min(0.5, x + 2 * (0.4 - x));
+            double exact = IrradianceClipped(light.vertices, 1.0, p, Vec3d(0, 1, 0));
+            if (x0 < x1) {  // the occluder's shadow on the light's plane, seen from p
+                const std::vector<Vec3d> hidden = {
+                    {x0, 2, -0.5}, {x1, 2, -0.5}, {x1, 2, 0.5}, {x0, 2, 0.5}};
+                exact -= IrradianceClipped(hidden, 1.0, p, Vec3d(0, 1, 0));
+            }
+            r.worst = std::max(r.worst, std::abs(at(x, 0) - exact) / lit);
+        }
+        return r;
+    };
+    const Result traced = solve(false), inherited = solve(true);
+    std::printf("light rays %llu -> %llu, umbra %.2e -> %.2e, worst penumbra %.4f -> %.4f\n",
+                (unsigned long long)traced.rays, (unsigned long long)inherited.rays, traced.umbra,
+                inherited.umbra, traced.worst, inherited.worst);
+    EXPECT_LT(inherited.rays, traced.rays);
+    EXPECT_LT(inherited.umbra, 1e-3);
+    EXPECT_LT(inherited.worst, traced.worst + 0.005);
+}
+
 // A shadow edge sharper than a light-map texel, inside a node at the depth cap (M2: two
 // texels): the node's biquadratic through its 3 x 3 Gauss points (two in umbra, one lit
 // per row) rings across the step and lit its umbra side at 15 % of the lit value here
