@@ -296,6 +296,17 @@ TEST(DirectLight, PointMovedOntoAFaceTakesItsPlaneWithoutAFaceRay) {
     }
 }
 
+// A patch of four probes (with their cache keys) and a centre on face C at height y.
+void ProbePatch(float y, std::vector<ReceiverPoint>* pts, std::vector<ProbeKey>* keys) {
+    const Vec3f n(0, 1, 0);
+    for (const auto& [x, z] : {std::pair{4.5f, -0.5f}, {5.5f, -0.5f}, {4.5f, 0.5f}, {5.5f, 0.5f},
+                               {5.f, 0.f}}) {
+        pts->push_back({{x, y, z}, n, {x, y, z}, n});
+        if (keys->size() < 4)
+            keys->push_back({std::bit_cast<uint32_t>(x), std::bit_cast<uint32_t>(z), 0, 0});
+    }
+}
+
 // Probes found in the cache take their E and states from it, so their visibility points
 // are not moved onto the surface: a patch of four probes and a centre on patch C, a little
 // under it (one origin ray each, up), evaluated twice with one cache traces five origin rays,
@@ -304,15 +315,9 @@ TEST(DirectLight, PointMovedOntoAFaceTakesItsPlaneWithoutAFaceRay) {
 TEST(DirectLight, ProbesFoundInTheCacheAreNotMovedOntoTheSurface) {
     FoldScene f;
     DirectLight direct(f.scene, f.scene.solver, f.vis, 1e-3f, 100, 0.05f);
-    const Vec3f n(0, 1, 0);
     std::vector<ReceiverPoint> pts;
     std::vector<ProbeKey> keys;
-    for (const auto& [x, z] : {std::pair{4.5f, -0.5f}, {5.5f, -0.5f}, {4.5f, 0.5f}, {5.5f, 0.5f},
-                               {5.f, 0.f}}) {
-        pts.push_back({{x, -0.002f, z}, n, {x, -0.002f, z}, n});
-        if (keys.size() < 4)
-            keys.push_back({std::bit_cast<uint32_t>(x), std::bit_cast<uint32_t>(z), 0, 0});
-    }
+    ProbePatch(-0.002f, &pts, &keys);
     ProbeCache cache;
     auto origin_rays = [&](std::vector<float>* e, std::span<const uint8_t> known) {
         const uint64_t before = RaysByKind()[size_t(RayKind::kOrigin)];
@@ -337,15 +342,9 @@ TEST(DirectLight, ProbesFoundInTheCacheAreNotMovedOntoTheSurface) {
 TEST(DirectLight, NewProbesTakeInheritedStatesWithoutRays) {
     FoldScene f;
     DirectLight direct(f.scene, f.scene.solver, f.vis, 1e-3f, 100, 0.05f);
-    const Vec3f n(0, 1, 0);
     std::vector<ReceiverPoint> pts;
     std::vector<ProbeKey> keys;
-    for (const auto& [x, z] : {std::pair{4.5f, -0.5f}, {5.5f, -0.5f}, {4.5f, 0.5f}, {5.5f, 0.5f},
-                               {5.f, 0.f}}) {
-        pts.push_back({{x, 0.f, z}, n, {x, 0.f, z}, n});
-        if (keys.size() < 4)
-            keys.push_back({std::bit_cast<uint32_t>(x), std::bit_cast<uint32_t>(z), 0, 0});
-    }
+    ProbePatch(0.f, &pts, &keys);
     auto classify_rays = [&](ProbeCache* cache, std::span<const uint8_t> inherited,
                              std::vector<float>* e) {
         const uint64_t before = RaysByKind()[size_t(RayKind::kClassify)];
