@@ -77,9 +77,7 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
                         PolygonPoint(l.vertices, t, double(a) / l.grid, double(b) / l.grid);
                     l.grid_pos.push_back(p);
                     l.grid_target.push_back(Vec3f(p + (centre - p) * 0.01));
-                    const Vec3f& end = l.grid_target.back();
-                    if (l.centre_t < 0 && end.x == l.classify.back().x &&
-                        end.y == l.classify.back().y && end.z == l.classify.back().z)
+                    if (l.centre_t < 0 && l.grid_target.back() == l.classify.back())
                         l.centre_t = int(t), l.centre_a = a, l.centre_b = b;
                 }
             }
@@ -384,9 +382,6 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     return out;
 }
 
-// Every light at the points. With probes (the first `probes` points surround one small
-// patch), the probes are evaluated first, or found in the cache; where all of them agree
-// on a light vertex's visibility, the other points take it without a ray.
 std::vector<uint8_t> DirectLight::ProbeAgreement(const ProbeCache& cache,
                                                  std::span<const ProbeKey> keys) const {
     std::vector<uint8_t> agree;
@@ -404,6 +399,9 @@ std::vector<uint8_t> DirectLight::ProbeAgreement(const ProbeCache& cache,
     return agree;
 }
 
+// Every light at the points. With probes (the first `probes` points surround one small
+// patch), the probes are evaluated first, or found in the cache; where all of them agree
+// on a light vertex's visibility, the other points take it without a ray.
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
                             size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
                             std::span<const uint8_t> known,

@@ -120,16 +120,13 @@ public:
     // The light states the probes of `node` (evaluated with its control grid) agreed on,
     // from the cache (empty: it had no probes, or they are not all there).
     std::vector<uint8_t> LightProbeAgreement(const QuadNode& node) const {
-        if (!use_probes || int(node.level) + kCoherentLevels < max_level_ || ng_ <= 1)
+        if (!Coherent(node))
             return {};
-        const int gl = std::min(finest_, int(node.level) + 2);
+        const int gl = std::min(finest_, int(node.level) + 2), n_gauss = ng_ * ng_;
         const uint32_t code = KnownCode(known);
         std::vector<ProbeKey> keys;
-        for (int c : {0, gc_ - 1, gc_ * (gc_ - 1), gc_ * gc_ - 1}) {
-            const auto [u, v] = Uv(node, ng_ * ng_ + c, ng_ * ng_);
-            keys.push_back({std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl),
-                            code});
-        }
+        for (int k : ProbeSlots(true, n_gauss))
+            keys.push_back(KeyAt(node, k, n_gauss, gl, code));
         return direct_.ProbeAgreement(probe_cache_, keys);
     }
 
@@ -159,21 +156,31 @@ private:
         return std::make_pair(float(node.U(s)), float(node.V(t)));
     }
 
+    // Whether a node's points share the visibility of probes (small nodes, near the cap).
+    bool Coherent(const QuadNode& node) const {
+        return use_probes && int(node.level) + kCoherentLevels >= max_level_ && ng_ > 1;
+    }
+
+    // The probes' point indices: the control grid's corners, or the Gauss grid's.
+    std::array<int, 4> ProbeSlots(bool control, int n_gauss) const {
+        if (control)
+            return {n_gauss, n_gauss + gc_ - 1, n_gauss + gc_ * (gc_ - 1), n_gauss + gc_ * gc_ - 1};
+        return {0, ng_ - 1, ng_ * (ng_ - 1), ng_ * ng_ - 1};
+    }
+
+    // The cache key of point `idx` of a node: its exact chart coordinates and level.
+    ProbeKey KeyAt(const QuadNode& node, int idx, int n_gauss, int gl, uint32_t code) const {
+        const auto [u, v] = Uv(node, idx, n_gauss);
+        return {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), code};
+    }
+
     // slot_: evaluation order -> point index, probes first (the control grid's corners, or
     // the Gauss grid's). Returns the number of probes.
     size_t OrderPoints(const QuadNode& node, bool control, int n_gauss, int n_ctrl) {
         slot_.clear();
-        const bool coherent =
-            use_probes && int(node.level) + kCoherentLevels >= max_level_ && ng_ > 1;
-        if (coherent) {
-            if (control) {
-                for (int c : {0, gc_ - 1, gc_ * (gc_ - 1), gc_ * gc_ - 1})
-                    slot_.push_back(n_gauss + c);
-            } else {
-                for (int c : {0, ng_ - 1, ng_ * (ng_ - 1), ng_ * ng_ - 1})
-                    slot_.push_back(c);
-            }
-        }
+        if (Coherent(node))
+            for (int k : ProbeSlots(control, n_gauss))
+                slot_.push_back(k);
         const size_t probes = slot_.size();
         for (int k = 0; k < n_gauss + n_ctrl; ++k)
             if (std::find(slot_.begin(), slot_.begin() + std::ptrdiff_t(probes), k) ==
@@ -194,10 +201,8 @@ private:
         }
         keys_.resize(probes);
         const uint32_t code = KnownCode(known);
-        for (size_t k = 0; k < probes; ++k) {
-            const auto [u, v] = Uv(node, slot_[k], n_gauss);
-            keys_[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), code};
-        }
+        for (size_t k = 0; k < probes; ++k)
+            keys_[k] = KeyAt(node, slot_[k], n_gauss, gl, code);
     }
 
     // The sky at all_pts_: control points on a node's edges are its neighbours' too (same
@@ -210,10 +215,8 @@ private:
     // The probes themselves take sky_inherited (their tested parent's agreement) as known.
     void SkyShared(const QuadNode& node, int gl, int n_gauss, size_t probes) {
         std::vector<ProbeKey> keys(slot_.size());
-        for (size_t k = 0; k < slot_.size(); ++k) {
-            const auto [u, v] = Uv(node, slot_[k], n_gauss);
-            keys[k] = {std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(v), uint32_t(gl), 0};
-        }
+        for (size_t k = 0; k < slot_.size(); ++k)
+            keys[k] = KeyAt(node, slot_[k], n_gauss, gl, 0);
         sky_prior = SkyProbes(keys, n_gauss, probes);
         const std::vector<uint8_t>& prior = sky_prior;
         std::vector<size_t> uncached;

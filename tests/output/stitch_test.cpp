@@ -219,6 +219,21 @@ protected:
     void SetUp() override { dir_ = solve::testing::FreshDir("stitch"); }
     void TearDown() override { std::filesystem::remove_all(dir_); }
 
+    // The grid bake of `o`, written afresh: its views without and with the stitch, and the
+    // stitch's edge counts.
+    struct Stitched {
+        BakeView raw, view;
+        SeamGraphStats gs;
+    };
+    Stitched BakeAndStitch(const GridOptions& o) {
+        std::filesystem::remove_all(dir_);
+        WriteGridBake(dir_, o);
+        Stitched s{OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off), OpenBakeView(dir_),
+                   {}};
+        BuildSeamStitch(s.view, &s.gs);
+        return s;
+    }
+
     // Per-chart shaders of a view (tiles and fields kept by the fixture).
     void LoadShaders(const BakeView& view) {
         const size_t n = view.chart_count();
@@ -373,14 +388,9 @@ TEST_F(StitchTest, BordersShowOneValue) {
 TEST_F(StitchTest, CreaseInTheShadingNormalsKeepsEachSidesField) {
     for (const float tilt : {1.5f, 0.7f}) {
         SCOPED_TRACE(tilt);
-        std::filesystem::remove_all(dir_);
         GridOptions o = Perturbed();
         o.tilt = tilt;
-        WriteGridBake(dir_, o);
-        const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
-        const BakeView view = OpenBakeView(dir_);
-        SeamGraphStats gs;
-        BuildSeamStitch(view, &gs);
+        const auto [raw, view, gs] = BakeAndStitch(o);
         const uint64_t all = uint64_t(o.m * ((o.kx - 1) * o.ky + o.kx * (o.ky - 1)));
         EXPECT_EQ(gs.stitched_edges, 0u);
         EXPECT_EQ(gs.fold_edges, all);
@@ -411,14 +421,9 @@ TEST_F(StitchTest, CreaseInTheShadingNormalsKeepsEachSidesField) {
 TEST_F(StitchTest, BendOfMoreThanThirtyDegreesKeepsEachSidesField) {
     for (const double degrees : {35.0, 20.0}) {
         SCOPED_TRACE(degrees);
-        std::filesystem::remove_all(dir_);
         GridOptions o = Perturbed();
         o.bend = float(degrees * std::acos(-1.0) / 180);
-        WriteGridBake(dir_, o);
-        const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
-        const BakeView view = OpenBakeView(dir_);
-        SeamGraphStats gs;
-        BuildSeamStitch(view, &gs);
+        const auto [raw, view, gs] = BakeAndStitch(o);
         const uint64_t all = uint64_t(o.m * ((o.kx - 1) * o.ky + o.kx * (o.ky - 1)));
         const uint64_t bend = degrees > 30 ? uint64_t(o.m * o.ky) : 0;
         EXPECT_EQ(gs.fold_edges, bend);
