@@ -20,12 +20,14 @@ std::optional<ToneCurve> ParseToneCurve(const std::string& name) {
     return std::nullopt;
 }
 
-float ApplyToneCurve(float radiance, const ToneMap& tm) {
-    const float x = radiance * std::exp2(tm.exposure);
+namespace {
+
+// The curve of a radiance already scaled by 2^exposure.
+float Curve(float x, ToneCurve curve) {
     if (!(x > 0))
         return 0;  // also NaN
     float y;
-    switch (tm.curve) {
+    switch (curve) {
     case ToneCurve::Filmic:
         y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
         break;
@@ -38,6 +40,12 @@ float ApplyToneCurve(float radiance, const ToneMap& tm) {
         break;
     }
     return std::isnan(y) ? 1.f : std::clamp(y, 0.f, 1.f);
+}
+
+}  // namespace
+
+float ApplyToneCurve(float radiance, const ToneMap& tm) {
+    return Curve(radiance * std::exp2(tm.exposure), tm.curve);
 }
 
 float EncodeSrgb(float c) {
@@ -98,8 +106,9 @@ uint8_t ToSrgb8(float display_linear) {
 }
 
 void ToneMapPixel(const Vec3f& radiance, const ToneMap& tm, uint8_t out[3]) {
+    const float scale = std::exp2(tm.exposure);  // ApplyToneCurve's, once for the three
     for (int c = 0; c < 3; ++c)
-        out[c] = ToSrgb8(ApplyToneCurve(radiance[c], tm));
+        out[c] = ToSrgb8(Curve(radiance[c] * scale, tm.curve));
 }
 
 }  // namespace mebake::output

@@ -50,3 +50,27 @@ TEST(ToneMap, Srgb8IsTheFormulasCodeAroundEveryStepAndOnASweep) {
 
 }  // namespace
 }  // namespace mebake::output
+
+namespace mebake::output {
+namespace {
+
+// ToneMapPixel scales by 2^exposure once for its three channels: each channel's code is
+// still ToSrgb8(ApplyToneCurve(channel)), for every curve and exposure.
+TEST(ToneMap, PixelIsEachChannelsCurveAndCode) {
+    for (const ToneCurve curve : {ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clamp})
+        for (const float exposure : {-3.3f, 0.f, 0.7f, 2.f}) {
+            const ToneMap tm{exposure, curve};
+            for (int i = 0; i < 20000; ++i) {
+                const Vec3f r(float(i) * 1.3e-4f, std::exp(float(i % 97) * 0.2f - 12.f),
+                              i % 5 == 0 ? -1.f : float(i) * 7e-3f);
+                uint8_t px[3];
+                ToneMapPixel(r, tm, px);
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(px[c], ToSrgb8(ApplyToneCurve(r[c], tm)))
+                        << "curve " << int(curve) << " exposure " << exposure << " value " << r[c];
+            }
+        }
+}
+
+}  // namespace
+}  // namespace mebake::output
