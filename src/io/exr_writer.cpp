@@ -4,6 +4,7 @@
 
 #include "core/check.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/temp_file.h"
 #include "io/byte_stream.h"
 
@@ -181,11 +182,18 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     const size_t elem = half ? sizeof(Imath::half) : sizeof(float);
     char* data;
     if (half) {
+        // In parallel: the ZIP stream after it is one thread's (a light map band's
+        // conversion was a sixth of its EXR time, bench/RESULTS.md "Issue 13 (session 20)").
         m.half_scratch.resize(pixels.size());
-        for (size_t i = 0; i < pixels.size(); ++i) {
-            CHECK(std::isfinite(pixels[i]));
-            m.half_scratch[i] = Imath::half(std::clamp(pixels[i], -kHalfMax, kHalfMax));
-        }
+        ParallelForRange(
+            0, int64_t(pixels.size()),
+            [&](int64_t lo, int64_t hi) {
+                for (size_t i = size_t(lo); i < size_t(hi); ++i) {
+                    CHECK(std::isfinite(pixels[i]));
+                    m.half_scratch[i] = Imath::half(std::clamp(pixels[i], -kHalfMax, kHalfMax));
+                }
+            },
+            int64_t(1) << 16);
         data = reinterpret_cast<char*>(m.half_scratch.data());
     } else {
         m.scratch.assign(pixels.begin(), pixels.end());
