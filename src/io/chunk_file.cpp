@@ -175,6 +175,7 @@ ChunkReader::ChunkReader(std::string path, uint32_t kind, uint32_t min_version,
         if (e.offset > file_size_ || e.stored_size > file_size_ - e.offset)
             CorruptError({path_, e.offset}, "chunk {}[{}] runs past the end of the file",
                          TagName(e.tag), e.index);
+    checked_ = std::make_unique<std::atomic<bool>[]>(entries_.size());
 }
 
 ChunkReader::~ChunkReader() {
@@ -214,9 +215,13 @@ std::vector<uint8_t> ChunkReader::Read(uint32_t tag, uint32_t index) const {
         }
         done += uint64_t(n);
     }
-    if (Crc32(stored.data(), stored.size()) != e->crc)
-        CorruptError({path_, e->offset}, "chunk {}[{}] checksum mismatch (damaged file)",
-                     TagName(tag), index);
+    std::atomic<bool>& checked = checked_[size_t(e - entries_.data())];
+    if (!checked.load(std::memory_order_relaxed)) {
+        if (Crc32(stored.data(), stored.size()) != e->crc)
+            CorruptError({path_, e->offset}, "chunk {}[{}] checksum mismatch (damaged file)",
+                         TagName(tag), index);
+        checked.store(true, std::memory_order_relaxed);
+    }
     if (e->codec == kCodecStored) {
         if (e->raw_size != e->stored_size)
             CorruptError({path_, e->offset}, "chunk {}[{}] size mismatch", TagName(tag), index);

@@ -12,7 +12,9 @@
 // fsync and rename, so a crash never leaves a half-written file under the real name.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <cstring>
 #include <span>
 #include <string>
@@ -79,6 +81,10 @@ public:
     const std::string& path() const { return path_; }
     bool Has(uint32_t tag, uint32_t index = 0) const;
     // Reads, checks and decompresses a chunk. Throws Error(Corrupt) naming file and chunk.
+    // A chunk's CRC is checked at its first read through this reader only: the open file
+    // does not change under it, and an export reads each chart's solution chunk once per
+    // pass (the CRC was a tenth of a bake's outputs step, bench/RESULTS.md "Issue 13
+    // (session 20)"). Thread-safe.
     std::vector<uint8_t> Read(uint32_t tag, uint32_t index = 0) const;
     template <typename T>
     std::vector<T> ReadArray(uint32_t tag, uint32_t index = 0) const {
@@ -101,6 +107,7 @@ private:
     uint64_t file_size_ = 0;
     uint32_t version_ = 0;
     std::vector<Entry> entries_;
+    std::unique_ptr<std::atomic<bool>[]> checked_;  // per entry: its CRC matched once
 };
 
 // Fsyncs a directory so renames inside it are durable.

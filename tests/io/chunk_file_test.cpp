@@ -83,6 +83,53 @@ TEST(ChunkFile, EveryFlippedByteIsDetectedAndNamed) {
     std::filesystem::remove(path);
 }
 
+// A chunk's CRC is checked at its first read through a reader only (chunk_file.h): a chunk
+// that fails keeps failing through the same reader, and a new reader checks again.
+TEST(ChunkFile, AFailedChecksumIsCheckedAgainAndANewReaderChecksAgain) {
+    std::string path = TempPath("chunks-once");
+    WriteSample(path);
+    std::vector<char> good;
+    {
+        std::ifstream f(path, std::ios::binary);
+        good.assign(std::istreambuf_iterator<char>(f), {});
+    }
+    auto write = [&](const std::vector<char>& bytes) {
+        std::ofstream f(path, std::ios::binary | std::ios::trunc);
+        f.write(bytes.data(), std::streamsize(bytes.size()));
+    };
+    // A byte inside BIGF's stored data: its read fails, the header and table stay good.
+    std::vector<char> bad;
+    for (size_t at = 64; at < good.size() && bad.empty(); ++at) {
+        std::vector<char> b = good;
+        b[at] = char(b[at] ^ 0x5A);
+        write(b);
+        try {
+            ChunkReader r(path, kKind, 1, 3);
+            try {
+                (void)r.Read(Tag("BIGF"));
+            } catch (const Error&) {
+                bad = b;
+            }
+        } catch (const Error&) {
+        }
+    }
+    ASSERT_FALSE(bad.empty());
+    {
+        ChunkReader r(path, kKind, 1, 3);
+        EXPECT_THROW(r.Read(Tag("BIGF")), Error);
+        EXPECT_THROW(r.Read(Tag("BIGF")), Error);  // not remembered as checked
+    }
+    write(good);
+    {
+        ChunkReader r(path, kKind, 1, 3);
+        EXPECT_EQ(r.ReadArray<float>(Tag("BIGF")).size(), 100000u);
+        write(bad);  // damaged after this reader checked it: the next reader sees it
+        ChunkReader fresh(path, kKind, 1, 3);
+        EXPECT_THROW(fresh.Read(Tag("BIGF")), Error);
+    }
+    std::filesystem::remove(path);
+}
+
 TEST(ChunkFile, TruncatedAndWrongKindAreRejected) {
     std::string path = TempPath("chunks-trunc");
     WriteSample(path);
