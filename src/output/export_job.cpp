@@ -181,18 +181,30 @@ void RunExportJob(const ExportJobOptions& c) {
         png = temporary.path;
     }
 
-    // The seam metric writes no file the other outputs read, nor reads one they write: it
-    // runs beside them as a task, so its own parallel loops fill the cores that the light
-    // map's stitch (three colour channels on two threads) and its chart batches leave idle.
-    // Its numbers and log lines are taken after the other outputs, as before.
+    // The seam metric and the vertex colours write no file the other outputs read, nor read
+    // one they write: they run beside the light map as tasks, so their own parallel loops
+    // fill the cores that the light map leaves idle (the stitch's three colour channels on
+    // two threads, the EXR's ZIP stream beside the shorter PNG one, the .glb). Their numbers
+    // and log lines are taken after the light map and the mesh, in the order they had.
     AllSeams seams;
-    double seams_seconds = 0;
+    double seams_seconds = 0, colors_seconds = 0;
+    VertexColorStats colors;
     TaskGroup beside;
     if (!c.stats.empty())
         beside.Run([&] {
             const auto t = Clock::now();
             seams = MeasureAllSeams(view);
             seams_seconds = Since(t);
+        });
+    if (!c.vertex_colors.empty())
+        beside.Run([&] {
+            const auto t = Clock::now();
+            VertexColorOptions vo;
+            vo.tone = c.maps.tone;
+            vo.float_colors = c.float_colors;
+            vo.cache_bytes = size_t(MemoryBudget(c.memory).ExportCache());
+            colors = WriteVertexColors(view, c.vertex_colors, vo);
+            colors_seconds = Since(t);
         });
 
     struct Map {
@@ -233,14 +245,10 @@ void RunExportJob(const ExportJobOptions& c) {
                      FormatCount(double(st.vertices)), FormatCount(double(st.triangles)),
                      FormatSeconds(Since(t)));
     }
+    beside.Wait();
     if (!c.vertex_colors.empty()) {
-        const auto t = Clock::now();
-        VertexColorOptions vo;
-        vo.tone = c.maps.tone;
-        vo.float_colors = c.float_colors;
-        vo.cache_bytes = size_t(MemoryBudget(c.memory).ExportCache());
-        const auto st = WriteVertexColors(view, c.vertex_colors, vo);
-        seconds["vertex_colors"] = Since(t);
+        const VertexColorStats& st = colors;
+        seconds["vertex_colors"] = colors_seconds;
         progress.Add(view.chart_count());
         j["vertex_colors"] = {
             {"path", c.vertex_colors},     {"vertices", st.vertices},
@@ -248,10 +256,9 @@ void RunExportJob(const ExportJobOptions& c) {
             {"faces", st.faces},           {"hole_fill_faces_dropped", st.hole_fill_faces}};
         spdlog::info("vertex colours: {} ({} vertices, {} faces, {})", c.vertex_colors,
                      FormatCount(double(st.vertices)), FormatCount(double(st.faces)),
-                     FormatSeconds(Since(t)));
+                     FormatSeconds(colors_seconds));
     }
     if (!c.stats.empty()) {
-        beside.Wait();
         ReportAllSeams(seams, &j);
         seconds["seams"] = seams_seconds;
         progress.Add(view.chart_count());
