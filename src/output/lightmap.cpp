@@ -322,7 +322,7 @@ std::unique_ptr<TexelStitch> StitchForView(const BakeView& view, const Atlas& at
                  content == MapContent::Radiosity ? "light map" : "E map", s.texels, s.samples,
                  s.rms_before, s.rms_after, s.iterations);
     spdlog::debug("texel stitch: samples {}, channels {}", s.rows_in_memory ? "in memory" : "on disk",
-                  s.channels_together ? "together" : "in turn");
+                  s.channels_in_parallel ? "in parallel" : "in turn");
     return stitch;
 }
 

@@ -267,122 +267,6 @@ ChannelSolve SolveAndMeasure(SeamRows& a, const std::vector<double>& diag,
     return r;
 }
 
-// y_c = (I + lambda A^T A) x_c for every channel c at once: one pass over the rows for all
-// channels, each channel's sums made in ApplyNormal's order (the same doubles).
-void ApplyNormalAll(SeamRows& a, const std::vector<const std::vector<double>*>& x,
-                    const std::vector<std::vector<double>*>& y) {
-    const size_t nc = x.size();
-    for (size_t c = 0; c < nc; ++c)
-        *y[c] = *x[c];
-    std::vector<double> ax(nc);
-    a.ForEach([&](const SeamRow& row) {
-        const std::array<double, 8> w = row.Weights();
-        for (size_t c = 0; c < nc; ++c) {
-            const std::vector<double>& xc = *x[c];
-            double sum = 0;
-            for (size_t k = 0; k < 8; ++k)
-                sum += w[k] * xc[row.index[k]];
-            ax[c] = sum;
-        }
-        for (size_t c = 0; c < nc; ++c) {
-            std::vector<double>& yc = *y[c];
-            for (size_t k = 0; k < 8; ++k)
-                yc[row.index[k]] += kSeamWeight * w[k] * ax[c];
-        }
-    });
-}
-
-// SolveAndMeasure for every channel, the CGs in lockstep: each step's products for all the
-// channels still iterating take one pass over the rows (ApplyNormalAll), so the rows are
-// read and their weights made once per step, not once per channel. Each channel's
-// iterations, stops and vectors are SolveChannel's, to the bit.
-std::vector<ChannelSolve> SolveAndMeasureAll(SeamRows& a, const std::vector<double>& diag,
-                                             std::vector<std::vector<double>>& xs) {
-    const size_t nc = xs.size(), n = diag.size();
-    std::vector<ChannelSolve> out(nc);
-    for (size_t c = 0; c < nc; ++c)
-        out[c].before = MismatchSquares(a, xs[c]);
-    struct Channel {
-        std::vector<double> r, p, q;
-        double rz = 0, stop = 0;
-        bool active = true;
-    };
-    std::vector<Channel> ch(nc);
-    std::vector<const std::vector<double>*> in;
-    std::vector<std::vector<double>*> res;
-    for (size_t c = 0; c < nc; ++c) {
-        ch[c].r.resize(n), ch[c].p.resize(n), ch[c].q.resize(n);
-        in.push_back(&xs[c]);
-        res.push_back(&ch[c].q);
-    }
-    ApplyNormalAll(a, in, res);
-    for (size_t c = 0; c < nc; ++c) {
-        Channel& h = ch[c];
-        const std::vector<double>& x = xs[c];
-        double bnorm = 0;
-        for (size_t i = 0; i < n; ++i) {
-            h.r[i] = x[i] - h.q[i];
-            h.p[i] = h.r[i] / diag[i];
-            h.rz += h.r[i] * h.p[i];
-            bnorm += x[i] * x[i];
-        }
-        h.stop = kTolerance * kTolerance * std::max(bnorm, 1e-300);
-    }
-    for (int it = 0; it < kMaxIterations; ++it) {
-        in.clear();
-        res.clear();
-        for (size_t c = 0; c < nc; ++c) {
-            Channel& h = ch[c];
-            if (!h.active)
-                continue;
-            double rr = 0;
-            for (size_t i = 0; i < n; ++i)
-                rr += h.r[i] * h.r[i];
-            if (rr <= h.stop) {
-                h.active = false;
-                out[c].iterations = it;
-                continue;
-            }
-            in.push_back(&h.p);
-            res.push_back(&h.q);
-        }
-        if (in.empty())
-            break;
-        ApplyNormalAll(a, in, res);
-        for (size_t c = 0; c < nc; ++c) {
-            Channel& h = ch[c];
-            if (!h.active)
-                continue;
-            std::vector<double>& x = xs[c];
-            double pq = 0;
-            for (size_t i = 0; i < n; ++i)
-                pq += h.p[i] * h.q[i];
-            if (!(pq > 0)) {
-                h.active = false;
-                out[c].iterations = it;
-                continue;
-            }
-            const double alpha = h.rz / pq;
-            double rz_next = 0;
-            for (size_t i = 0; i < n; ++i) {
-                x[i] += alpha * h.p[i];
-                h.r[i] -= alpha * h.q[i];
-                rz_next += h.r[i] * (h.r[i] / diag[i]);
-            }
-            const double beta = rz_next / h.rz;
-            h.rz = rz_next;
-            for (size_t i = 0; i < n; ++i)
-                h.p[i] = h.r[i] / diag[i] + beta * h.p[i];
-        }
-    }
-    for (size_t c = 0; c < nc; ++c) {
-        if (ch[c].active)
-            out[c].iterations = kMaxIterations;
-        out[c].after = MismatchSquares(a, xs[c]);
-    }
-    return out;
-}
-
 // A solved texel as the map stores it: B >= 0; E is signed.
 float StoredValue(MapContent content, double x) {
     return content == MapContent::Radiosity ? std::max(0.f, float(x)) : float(x);
@@ -521,23 +405,23 @@ TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent co
     s.texels = n;
     s.samples = rows.rows();
     // The channels' CGs share nothing but the rows and the diagonal: with the rows in
-    // memory and room in memory_bytes for every channel's four CG vectors, they run
-    // together (SolveAndMeasureAll: the rows read once per step for all three, on one
-    // thread, which leaves the other to the export's tasks beside the light map; three
-    // channels on two threads cost 1.5x the CPU, bench/RESULTS.md "Issue 13 (session
-    // 20)"); else one after the other with one set of vectors. The same doubles either way.
+    // memory and room in memory_bytes for every channel's four CG vectors, they run in
+    // parallel (each writes its own vectors: the same doubles as one after the other);
+    // else one after the other with one set of vectors.
     const uint64_t cg_bytes = uint64_t(solved) * 4 * sizeof(double) * n;
-    const bool together = rows.in_memory() && rows.memory_bytes() + cg_bytes <= memory_bytes;
+    const bool parallel = rows.in_memory() && rows.memory_bytes() + cg_bytes <= memory_bytes;
     s.rows_in_memory = rows.in_memory();
-    s.channels_together = together && rows.rows() > 0;
+    s.channels_in_parallel = parallel && rows.rows() > 0;
     std::vector<ChannelSolve> solves(solved);
-    if (rows.rows() > 0 && together) {
+    if (rows.rows() > 0 && parallel) {
         std::vector<std::vector<double>> xs(solved, std::vector<double>(n));
         for_each_slot(false, [&](size_t i, const float* v) {
             for (size_t ch = 0; ch < solved; ++ch)
                 xs[ch][i] = v[ch];
         });
-        solves = SolveAndMeasureAll(rows, diag, xs);
+        ParallelFor(0, int64_t(solved), [&](int64_t ch) {
+            solves[size_t(ch)] = SolveAndMeasure(rows, diag, xs[size_t(ch)]);
+        });
         for_each_slot(true, [&](size_t i, float* v) {
             for (size_t ch = 0; ch < solved; ++ch)
                 v[ch] = StoredValue(content, xs[ch][i]);

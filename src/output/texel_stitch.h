@@ -16,7 +16,7 @@
 // (I + lambda A^T A) x = x0 are solved per channel by conjugate gradients with a Jacobi
 // preconditioner, A applied as a sparse operator (8 entries per sample), never formed:
 // memory grows with the seams' texels, not with the map: 5 doubles of CG per texel while
-// the CG runs (13 when the three colour channels are solved together, below). The
+// the CG runs (13 when the three colour channels are solved in parallel, below). The
 // samples, 64 bytes each, stay in memory up to the `export.stitch_rows` share (every CG
 // pass reads them all); past it they go to a temporary file read in order a block at a
 // time behind a 4 MiB page cache. The texels' indices and values are in two more files
@@ -27,9 +27,8 @@
 // per-texel array of the whole map outlives the CG (it was 17 MB at 100M triangles, 858K
 // seam texels). The global CG is kept (one system, not one per seam component) so the
 // texels are the same bytes as before. Each channel's CG is single-threaded and in chart
-// order; when the samples and their vectors fit the share the channels' CGs run together
-// in lockstep, each step's three products from one pass over the samples (each channel's
-// sums in their own order): the same texels for any thread count. Folds (faces more than 45 degrees
+// order; the channels run in parallel when the samples and their vectors fit the share
+// (they share nothing else): the same texels for any thread count. Folds (faces more than 45 degrees
 // apart) and mesh borders are left alone, as seam_graph.h does.
 #pragma once
 
@@ -50,7 +49,7 @@ struct TexelStitchStats {
     double rms_before = 0;  // bilinear mismatch over all samples and channels
     double rms_after = 0;
     bool rows_in_memory = true;         // else in a temporary file
-    bool channels_together = false;  // in lockstep, one pass over the rows; else in turn
+    bool channels_in_parallel = false;  // else solved in turn
 };
 
 // One chart's stitched texels, read back from the stitch's file for the chart being shaded.
@@ -83,7 +82,7 @@ private:
 constexpr double kSeamWeight = 100;
 
 // `memory_bytes` (the export's `export.stitch_rows` share) holds the seam samples in memory
-// while they fit, and lets the colour channels' CGs run together when their vectors fit
+// while they fit, and lets the colour channels' CGs run in parallel when their vectors fit
 // too; past it the samples go to a temporary file and the channels are solved in turn. It
 // changes the time and memory, never the texels.
 TexelStitch StitchTexels(const BakeView& view, const Atlas& atlas, MapContent content,

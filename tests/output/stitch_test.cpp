@@ -585,7 +585,7 @@ TEST_F(StitchTest, TexelsComeBackPerChart) {
 }
 
 // The stitch's share decides where the seam samples live (memory or a temporary file) and
-// whether the colour channels' CGs run together in lockstep; the texels, the iterations and the
+// whether the colour channels' CGs run in parallel; the texels, the iterations and the
 // mismatch must be the same bits in all three ways, for any thread count.
 TEST_F(StitchTest, TexelsAreTheSameWhereverTheRowsLive) {
     const GridOptions o = Perturbed();
@@ -598,7 +598,7 @@ TEST_F(StitchTest, TexelsAreTheSameWhereverTheRowsLive) {
     };
     // 0: every row goes to the file; 64 rows: the first rows in memory, then all moved to
     // the file; 256 KiB: one block of rows in memory, too little left for three channels'
-    // CGs (channels in turn); 64 MiB: rows and every channel's CG in memory (together).
+    // CGs (channels in turn); 64 MiB: rows and every channel's CG in memory (in parallel).
     TexelStitchStats stats[4];
     const TexelStitch on_disk = solve(0, 2, &stats[0]);
     const TexelStitch moved = solve(64 * 64, 2, &stats[1]);
@@ -608,10 +608,10 @@ TEST_F(StitchTest, TexelsAreTheSameWhereverTheRowsLive) {
     ASSERT_GT(stats[3].samples, 64u);
     ASSERT_LT(stats[3].samples, 4096u);  // one block of rows
     ASSERT_GT(stats[3].iterations, 1);
-    const bool in_memory[4] = {false, false, true, true}, together[4] = {false, false, false, true};
+    const bool in_memory[4] = {false, false, true, true}, in_parallel[4] = {false, false, false, true};
     for (int k = 0; k < 4; ++k) {
         EXPECT_EQ(stats[k].rows_in_memory, in_memory[k]) << k;
-        EXPECT_EQ(stats[k].channels_together, together[k]) << k;
+        EXPECT_EQ(stats[k].channels_in_parallel, in_parallel[k]) << k;
     }
     for (int k = 0; k < 3; ++k) {
         EXPECT_EQ(stats[k].texels, stats[3].texels);
