@@ -26,9 +26,9 @@ double AtanSmall(double x) {
     return x + x * (z * p / q);
 }
 
-}  // namespace
-
-double EdgeAngle(double y, double x) {
+// EdgeAngle's body, inlined into LambertEdge (a call per edge showed as ~2 % of the
+// bunny's solve once the penumbra's edges were summed one by one).
+inline double Angle(double y, double x) {
     // pi/4, pi/2 and pi as two doubles each (value + the rest), as Cephes adds them.
     constexpr double kPio4 = 0.78539816339744830962, kPio4Lo = 3.061616997868382943065E-17;
     constexpr double kPio2 = 1.57079632679489661923, kPio2Lo = 6.123233995736765886130E-17;
@@ -45,21 +45,25 @@ double EdgeAngle(double y, double x) {
     return t;
 }
 
+}  // namespace
+
+double EdgeAngle(double y, double x) { return Angle(y, x); }
+
+Vec3d LambertEdge(const Vec3d& p, const Vec3d& q, const Vec3d& x) {
+    const Vec3d a = p - x, b = q - x;
+    const Vec3d c = Cross(a, q - p);
+    const double len = Length(c);
+    // len == 0: x is on the edge's line, the edge subtends no solid angle (theta = 0) or x
+    // is on the edge itself (on the emitter's plane, handled by the caller).
+    if (!(len > 0))
+        return Vec3d{};
+    return c * (Angle(len, Dot(a, b)) / len);
+}
+
 Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
     Vec3d sum;
-    for (int k = 0; k < nv; ++k) {
-        const Vec3d& p = v[k];
-        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
-        const Vec3d a = p - x, b = q - x;
-        const Vec3d c = Cross(a, q - p);
-        const double len = Length(c);
-        // len == 0: x is on the edge's line, the edge subtends no solid angle (theta = 0) or x
-        // is on the edge itself (on the emitter's plane, handled by the caller).
-        if (!(len > 0))
-            continue;
-        const double theta = EdgeAngle(len, Dot(a, b));
-        sum += c * (theta / len);
-    }
+    for (int k = 0; k < nv; ++k)
+        sum += LambertEdge(v[k], v[k + 1 == nv ? 0 : k + 1], x);
     return sum;
 }
 

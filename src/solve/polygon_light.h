@@ -44,6 +44,11 @@ double EdgeAngle(double y, double x);
 // the vector irradiance of a uniform polygon is -L/2 times it.
 Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x);
 
+// One edge's term of LambertSum: theta * unit(a x e) for the edge p -> q, zero when x is on
+// the edge's line (it subtends no solid angle). Sums over edges are additive: the
+// penumbra's cells share edges, which it evaluates once (penumbra.cpp).
+Vec3d LambertEdge(const Vec3d& p, const Vec3d& q, const Vec3d& x);
+
 // Sutherland-Hodgman: the part of polygon v[0..nv) in {y : (y - x).n >= 0}, written to
 // out (room for 2 nv vertices: each edge emits at most two); returns its vertex count. A
 // non-convex polygon may come out with zero-area bridges, which boundary integrals (as

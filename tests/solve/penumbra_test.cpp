@@ -88,12 +88,12 @@ TEST(Penumbra, GenericEdgeAnglesCloseToExact) {
 }
 
 // Points on the lit side of the penumbra, where a sliver to half of the light is hidden:
-// most of their cells are visible, so E is taken as the whole light's closed form less the
-// hidden and partly hidden cells (PenumbraPass::Run). It must agree with the exact answer
-// as the sum over visible cells does (GenericEdgeAnglesCloseToExact: 3.5 % of the lit value
-// at worst), and the hidden part
-// must come off: well under the unoccluded value wherever a tenth of it is hidden.
-TEST(Penumbra, MostlyVisibleLightIsTheWholeLightLessTheHiddenPart) {
+// most of their cells are visible, and their shared edges cancel, so E is summed over the
+// visible part's outline and the finest cells (PenumbraPass::Sum). It must agree with the
+// exact answer as elsewhere (GenericEdgeAnglesCloseToExact: 3.5 % of the lit value at
+// worst), and the hidden part must come off: well under the unoccluded value wherever a
+// tenth of it is hidden.
+TEST(Penumbra, MostlyVisibleLightLosesItsHiddenPart) {
     EdgeScene s(27.0);
     DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
     std::vector<ReceiverPoint> pts;
@@ -115,6 +115,50 @@ TEST(Penumbra, MostlyVisibleLightIsTheWholeLightLessTheHiddenPart) {
         }
     }
     EXPECT_GT(partly, 3);
+}
+
+// Tilted receivers whose horizon cuts the light: the cells it crosses are clipped and
+// summed on their own, the others through their shared edges (PenumbraPass::Sum). The sum
+// must agree with the exact answer (the visible part above the horizon) as on a flat floor,
+// and miss none of the horizon's cut: wherever a tenth of the unoccluded light is below the
+// horizon, E is well under the unclipped light.
+TEST(Penumbra, HorizonCuttingTheLightCloseToExact) {
+    for (double degrees : {27.0, 101.0}) {
+        EdgeScene s(degrees);
+        DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
+        const Vec3d h = Normalize(s.d + Vec3d(0, 0.1, 0));  // leaning along the edge
+        std::vector<ReceiverPoint> pts;
+        for (double t = -1.2; t <= 1.2; t += 0.04) {
+            const Vec3d p = Vec3d(s.e0.x, 0, s.e0.z) + s.n * t + s.d * 0.11;
+            pts.push_back({Vec3f(p), Vec3f(h), Vec3f(p), Vec3f(h)});
+        }
+        std::vector<float> e(pts.size() * 9);
+        direct.Evaluate(pts, e);
+        const double lit = IrradianceClipped(s.light.vertices, 1.0, Vec3d(0, 0, 0), h);
+        int in_penumbra = 0, cut = 0;
+        for (size_t p = 0; p < pts.size(); ++p) {
+            const Vec3d x(pts[p].position);
+            Vec3d m = Normalize(Cross(s.d, s.e0 - x));
+            if (Dot(s.e0 + s.n - x, m) > 0)
+                m = m * -1.0;
+            const auto visible = ClipToHalfSpace(s.light.vertices, x, m);
+            const double exact = visible.size() >= 3 ? IrradianceClipped(visible, 1.0, x, h) : 0.0;
+            const double got = Dot(Vec3d(e[p * 9], e[p * 9 + 1], e[p * 9 + 2]), h);
+            EXPECT_NEAR(got, exact, 0.035 * lit) << degrees << " degrees, point " << p;
+            in_penumbra += exact > 0.01 * lit && exact < 0.99 * lit;
+            // Unclipped, the visible light below the horizon would count negative.
+            const double unclipped =
+                visible.size() >= 3 ? Dot(VectorIrradiance(visible, 1.0, x), h) : 0.0;
+            if (exact - unclipped > 0.05 * lit) {
+                cut += exact > 0.01 * lit && exact < 0.99 * lit;
+                EXPECT_GT(got, unclipped + 0.5 * (exact - unclipped)) << degrees << " degrees";
+            }
+        }
+        EXPECT_GT(in_penumbra, 10) << degrees << " degrees";
+        EXPECT_GT(cut, 5) << degrees << " degrees";  // of them, cut by the horizon
+        std::printf("edge at %5.1f deg: %d penumbra points, %d cut by the horizon\n", degrees,
+                    in_penumbra, cut);
+    }
 }
 
 // The light's centre is a classification target, and on a parallelogram also the grid

@@ -126,6 +126,35 @@ TEST(PolygonLight, EdgeAngleIsAtan2WithinOneUlp) {
     EXPECT_EQ(EdgeAngle(1.0, 1.0), std::atan2(1.0, 1.0));
 }
 
+// LambertEdge is LambertSum's term (the same bits summed in the same order), and its sums
+// are additive as the penumbra's shared edges need (penumbra.cpp's EdgeTable): an edge
+// reversed is the term negated, an edge split at a point on it the same term.
+TEST(PolygonLight, LambertEdgeIsTheSumsTermAndAdditive) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int trial = 0; trial < 1000; ++trial) {
+        const Vec3d v[3] = {{u(rng), 2 + u(rng), u(rng)}, {u(rng), 2 + u(rng), u(rng)},
+                            {u(rng), 2 + u(rng), u(rng)}};
+        const Vec3d x(u(rng), u(rng), u(rng));
+        Vec3d sum;
+        for (int k = 0; k < 3; ++k)
+            sum += LambertEdge(v[k], v[(k + 1) % 3], x);
+        const Vec3d whole = LambertSum(v, 3, x);
+        EXPECT_EQ(sum.x, whole.x);
+        EXPECT_EQ(sum.y, whole.y);
+        EXPECT_EQ(sum.z, whole.z);
+        const Vec3d there = LambertEdge(v[0], v[1], x), back = LambertEdge(v[1], v[0], x);
+        const Vec3d m = v[0] + (v[1] - v[0]) * (0.25 + 0.5 * (u(rng) + 1) / 2);
+        const Vec3d halves = LambertEdge(v[0], m, x) + LambertEdge(m, v[1], x);
+        const double scale = Length(there);
+        EXPECT_LT(Length(there + back), 1e-14 * scale);
+        EXPECT_LT(Length(there - halves), 1e-12 * scale);
+    }
+    // x on the edge's line: no term.
+    const Vec3d zero = LambertEdge({0, 0, 0}, {1, 0, 0}, {2, 0, 0});
+    EXPECT_EQ(Length(zero), 0.0);
+}
+
 TEST(PolygonLight, NormalAndAreaFollowTheWinding) {
     auto sq = CeilingSquare(1, 2);
     EXPECT_NEAR(PolygonNormal(sq).z, -1.0, 1e-15);
