@@ -506,7 +506,7 @@ private:
     // zeroed on every call (rep stos, a seventh of RefineCells' own time on the bunny).
     mutable std::vector<Vec3d> clip_;
     std::vector<Cell> visible_;            // visible uniform cells
-    EdgeTable edges_;                      // EdgeSums' edges of one point
+    EdgeTable edges_;                      // Sum's edges of one point
     SegmentBatch batch_;
     std::vector<std::pair<uint32_t, uint32_t>> asked_;  // (point, vertex)
 };
