@@ -109,7 +109,6 @@ private:
 };
 enum Stage : size_t { kLoad, kRepair, kSegment, kParameterize, kGrid, kGeometry, kWrite };
 
-
 // Normals over a whole repaired brick, looked up by global vertex id; copies made by
 // manifold splitting share an id and are averaged.
 class BrickNormals {
@@ -137,7 +136,7 @@ public:
         auto it = std::lower_bound(normals_.begin(), normals_.end(), id,
                                    [](const auto& a, uint64_t x) { return a.first < x; });
         return it != normals_.end() && it->first == id && Length(it->second) > 0 ? it->second
-                                                                                : fallback;
+                                                                                 : fallback;
     }
 
 private:
@@ -183,6 +182,15 @@ constexpr float kCreaseCos = 0.866f;
 
 namespace {
 
+// The index in RootResult::split_for of why a chart was split.
+size_t SplitReason(ParamStatus status) {
+    if (status == ParamStatus::kDistorted)
+        return 0;
+    if (status == ParamStatus::kFlipped || status == ParamStatus::kOverlap)
+        return 1;
+    return status == ParamStatus::kNotDisc ? 2 : 3;
+}
+
 // One chart of the segmentation through to its tiles: parameterized (unless the merge did
 // it), split in two and both halves back at the front of its queue when it fails (not a
 // disc, flipped or overlapping, too distorted), so the order of its parts is fixed; each
@@ -216,11 +224,7 @@ RootResult BuildFromRoot(const std::string& dir, uint32_t brick, uint32_t root, 
                 parts = std::max(parts, h + 1);
             if (parts >= 2) {
                 ++out.splits;
-                ++out.split_for[param.status == ParamStatus::kDistorted ? 0
-                                : param.status == ParamStatus::kFlipped ||
-                                          param.status == ParamStatus::kOverlap
-                                    ? 1
-                                : param.status == ParamStatus::kNotDisc ? 2 : 3];
+                ++out.split_for[SplitReason(param.status)];
                 for (uint32_t p = parts; p-- > 0;)
                     queue.push_front({ExtractChart(chart, half, p), depth + 1, {}});
                 clock.Lap(kSegment);
