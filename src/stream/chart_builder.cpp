@@ -12,6 +12,7 @@
 #include "stream/segment.h"
 #include "stream/spill.h"
 #include "stream/tile.h"
+#include "stream/work_order.h"
 
 #include <algorithm>
 #include <chrono>
@@ -388,12 +389,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     // The charts in parallel, largest first (a large chart left to the end would run
     // alone); their tiles are listed in chart order, so the order of the work changes no
     // byte.
-    std::vector<uint32_t> order(roots.size());
-    for (uint32_t c = 0; c < order.size(); ++c)
-        order[c] = c;
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        return roots[a].chart.triangles.size() > roots[b].chart.triangles.size();
-    });
+    const std::vector<uint32_t> order =
+        LargestFirst(roots.size(), [&](size_t c) { return roots[c].chart.triangles.size(); });
     std::vector<RootResult> built(roots.size());
     ParallelForInOrder(order, [&](uint32_t c) {
         built[c] = BuildFromRoot(dir, brick, c, std::move(roots[c]), brick_normals, popt, opt);

@@ -17,6 +17,7 @@
 #include "core/parallel.h"
 #include "stream/geometry_image.h"
 #include "stream/topology.h"
+#include "stream/work_order.h"
 
 #include <algorithm>
 #include <cmath>
@@ -266,19 +267,6 @@ Trial Try(const TriMesh& piece, const MergeOptions& o, bool whole) {
     return t;
 }
 
-// 0 .. n-1 by decreasing size(i), ties in index order: the trials started largest first,
-// so that a large one does not run alone at the end of a round (which thread runs a trial
-// changes no result).
-template <typename Size>
-std::vector<uint32_t> LargestFirst(size_t n, Size size) {
-    std::vector<uint32_t> order(n);
-    for (uint32_t i = 0; i < n; ++i)
-        order[i] = i;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](uint32_t a, uint32_t b) { return size(a) > size(b); });
-    return order;
-}
-
 // The charts as they merge: faces, areas, each live chart's flattening and square.
 struct MergeState {
     const TriMesh& mesh;
@@ -375,6 +363,8 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     // splits it) is left alone.
     st.live.resize(chart_count);
     st.joined.assign(chart_count, 0);
+    // The trials start largest first, so that a large one does not run alone at the end
+    // (which thread runs a trial changes no result); so do each round's below.
     ParallelForInOrder(LargestFirst(chart_count, [&](size_t c) { return st.faces_of[c].size(); }),
                        [&](uint32_t c) { st.live[c] = st.TryUnion(st.faces_of[c], {}); });
     st.part_scale.resize(chart_count);
