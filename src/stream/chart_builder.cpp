@@ -12,6 +12,7 @@
 #include "stream/segment.h"
 #include "stream/spill.h"
 #include "stream/tile.h"
+#include "stream/work_order.h"
 
 #include <algorithm>
 #include <chrono>
@@ -109,6 +110,58 @@ private:
 };
 enum Stage : size_t { kLoad, kRepair, kSegment, kParameterize, kGrid, kGeometry, kWrite };
 
+// Normals over a whole repaired brick, looked up by global vertex id; copies made by
+// manifold splitting share an id and are averaged.
+class BrickNormals {
+public:
+    explicit BrickNormals(const TriMesh& mesh) {
+        const std::vector<Vec3f> n = VertexNormals(mesh.position, mesh.triangles);
+        normals_.reserve(n.size());
+        for (size_t v = 0; v < n.size(); ++v)
+            normals_.emplace_back(mesh.vertex_id[v], n[v]);
+        std::sort(normals_.begin(), normals_.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        size_t kept = 0;
+        for (size_t k = 0; k < normals_.size();) {
+            size_t e = k;
+            Vec3f sum{};
+            while (e < normals_.size() && normals_[e].first == normals_[k].first)
+                sum += normals_[e++].second;
+            normals_[kept++] = {normals_[k].first, Normalize(sum)};
+            k = e;
+        }
+        normals_.resize(kept);
+    }
+    // The normal of vertex `id`, or `fallback` when it has none.
+    Vec3f At(uint64_t id, const Vec3f& fallback) const {
+        auto it = std::lower_bound(normals_.begin(), normals_.end(), id,
+                                   [](const auto& a, uint64_t x) { return a.first < x; });
+        return it != normals_.end() && it->first == id && Length(it->second) > 0 ? it->second
+                                                                                 : fallback;
+    }
+
+private:
+    std::vector<std::pair<uint64_t, Vec3f>> normals_;
+};
+
+// A chart from the segmentation (or the merge) waiting for its tile.
+struct Pending {
+    TriMesh chart;
+    int depth = 0;
+    ChartParam param;
+    bool united = false;     // a union from the merge (its own geometry resolution)
+    double parts_scale = 0;  // of a union: its parts' mean square side (chart_merge.h)
+};
+
+// What one chart of the segmentation became: its tiles, in order (itself, or the parts
+// its splits made, depth first).
+struct RootResult {
+    std::vector<ChartRecord> charts;
+    std::vector<std::string> tile_files;
+    uint64_t splits = 0;
+    std::array<uint64_t, 4> split_for{};  // distorted, flipped or overlapping, not a disc, other
+    std::array<double, kChartStageNames.size()> stage_seconds{};
+};
 }  // namespace
 
 uint32_t UnionEmitterResolution(double scale, double parts_scale, uint32_t geometry_resolution,
@@ -128,117 +181,29 @@ uint32_t UnionEmitterResolution(double scale, double parts_scale, uint32_t geome
 // the surface folds there, not because of noise.
 constexpr float kCreaseCos = 0.866f;
 
-BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt) {
-    BrickResult out;
+namespace {
+
+// The index in RootResult::split_for of why a chart was split.
+size_t SplitReason(ParamStatus status) {
+    if (status == ParamStatus::kDistorted)
+        return 0;
+    if (status == ParamStatus::kFlipped || status == ParamStatus::kOverlap)
+        return 1;
+    return status == ParamStatus::kNotDisc ? 2 : 3;
+}
+
+// One chart of the segmentation through to its tiles: parameterized (unless the merge did
+// it), split in two and both halves back at the front of its queue when it fails (not a
+// disc, flipped or overlapping, too distorted), so the order of its parts is fixed; each
+// part's grid, geometry image and tile. It reads only its own chart and writes only its
+// own files (named after `root`), so the charts of a brick can be built in parallel.
+RootResult BuildFromRoot(const std::string& dir, uint32_t brick, uint32_t root, Pending first,
+                         const BrickNormals& brick_normals, const ParamOptions& popt,
+                         const ChartBuildOptions& opt) {
+    RootResult out;
     StageClock clock(&out.stage_seconds);
-    std::vector<uint8_t> on_cut;
-    TriMesh mesh = LoadBrick(dir, brick, opt.cache_bytes, &on_cut);
-    clock.Lap(kLoad);
-    if (mesh.triangles.empty())
-        return out;
-    out.repair = Repair(mesh, on_cut, RepairOptions{});
-    // The caller keeps every brick's result to the end of the ingest: the report's counts,
-    // not its per-vertex cut flags (1 B per vertex of the whole mesh, 50 MB at 100M
-    // triangles: the ingest's peak grew with the mesh; bench/RESULTS.md, issue 16 session 12).
-    std::vector<uint8_t>().swap(out.repair.vertex_on_cut);
-    out.proxy_positions = mesh.position;
-    out.proxy_triangles.reserve(mesh.triangles.size() * 3);
-    for (const auto& t : mesh.triangles)
-        out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
-
-    // Normals over the whole repaired brick, so a vertex on a chart border has the same
-    // normal in every chart that holds it (per-chart normals made seams). Looked up by
-    // global vertex id; copies made by manifold splitting share an id and are averaged.
-    std::vector<std::pair<uint64_t, Vec3f>> brick_normals;
-    {
-        const std::vector<Vec3f> n = VertexNormals(mesh.position, mesh.triangles);
-        brick_normals.reserve(n.size());
-        for (size_t v = 0; v < n.size(); ++v)
-            brick_normals.emplace_back(mesh.vertex_id[v], n[v]);
-        std::sort(brick_normals.begin(), brick_normals.end(),
-                  [](const auto& a, const auto& b) { return a.first < b.first; });
-        size_t kept = 0;
-        for (size_t k = 0; k < brick_normals.size();) {
-            size_t e = k;
-            Vec3f sum{};
-            while (e < brick_normals.size() && brick_normals[e].first == brick_normals[k].first)
-                sum += brick_normals[e++].second;
-            brick_normals[kept++] = {brick_normals[k].first, Normalize(sum)};
-            k = e;
-        }
-        brick_normals.resize(kept);
-    }
-    auto normal_of = [&](uint64_t id, const Vec3f& fallback) {
-        auto it = std::lower_bound(brick_normals.begin(), brick_normals.end(), id,
-                                   [](const auto& a, uint64_t x) { return a.first < x; });
-        return it != brick_normals.end() && it->first == id && Length(it->second) > 0 ? it->second
-                                                                                      : fallback;
-    };
-
-    clock.Lap(kRepair);
-    SegmentOptions sopt;
-    sopt.max_chart_vertices = opt.max_chart_vertices;
-    sopt.lloyd_iterations = opt.lloyd_iterations;
-    SegmentReport sreport;
-    std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, &sreport);
-    uint64_t split_for[4] = {};  // distorted, flipped or overlapping, not a disc, other
-    ParamOptions popt;
-    popt.max_jacobian_deviation = opt.max_distortion;
-    popt.refine_options.max_iterations = opt.refine_iterations;
-    MergeReport mreport;
-    std::vector<ChartParam> merged_params;  // per chart after merging, when computed
-    std::vector<uint8_t> united;            // per chart after merging: 1 for a union
-    std::vector<double> parts_scale;        // per chart after merging: its parts' mean square
-    if (opt.merge_charts) {
-        MergeOptions mopt;
-        mopt.param = popt;
-        mopt.max_chart_vertices = opt.max_chart_vertices;
-        mopt.max_union_triangles = sopt.target_chart_faces;
-        // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
-        // square of at most max_merged_resolution texels (and never more than
-        // max_resolution, so it keeps every light-map texel it asks for).
-        const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
-        mopt.max_scale = merged_res *
-                         (opt.merge_horizon_cells ? opt.max_union_texel : std::sqrt(2.0)) *
-                         opt.texel_size;
-        // The turn bound stays on 8 x 8 cells per union (texel_size 0): with cells of 8
-        // texels lucy merged to 86 charts but its error against the path tracer rose from
-        // 4.65 % to 6.33 %, its 512-texel charts' indirect light 18-24 % low from the
-        // solver's 32 x 32 emitter samples per chart (bench/RESULTS.md, "Issue 13 (session
-        // 9)"; docs/method.md, "Merging").
-        if (opt.merge_horizon_cells) {
-            mopt.texel_size = opt.texel_size;
-            mopt.min_resolution = opt.min_resolution;
-            mopt.max_resolution = opt.max_resolution;
-        }
-        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united, &parts_scale);
-    }
-
-    // Charts in id order; a chart that fails (not a disc, flipped or overlapping, too distorted) is split
-    // in two and both halves go back to the front of the queue, so the order stays fixed.
-    // A chart straight from the merge comes with its parameterization (the same bits
-    // ParameterizeChart would give here).
-    struct Pending {
-        TriMesh chart;
-        int depth = 0;
-        ChartParam param;
-        bool united = false;  // a union from the merge (its own geometry resolution)
-        double parts_scale = 0;  // of a union: its parts' mean square side (chart_merge.h)
-    };
     std::deque<Pending> queue;
-    {
-        std::vector<TriMesh> charts = ExtractCharts(mesh, chart_of);
-        for (size_t c = 0; c < charts.size(); ++c) {
-            queue.push_back({std::move(charts[c]), 0, {}});
-            if (merged_params.size() == charts.size())
-                queue.back().param = std::move(merged_params[c]);
-            queue.back().united = opt.merge_horizon_cells && united.size() == charts.size() &&
-                                  united[c];
-            if (queue.back().united)
-                queue.back().parts_scale = parts_scale[c];
-        }
-    }
-    clock.Lap(kSegment);
+    queue.push_back(std::move(first));
     while (!queue.empty()) {
         Pending item = std::move(queue.front());
         queue.pop_front();
@@ -260,11 +225,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
                 parts = std::max(parts, h + 1);
             if (parts >= 2) {
                 ++out.splits;
-                ++split_for[param.status == ParamStatus::kDistorted ? 0
-                            : param.status == ParamStatus::kFlipped ||
-                                      param.status == ParamStatus::kOverlap
-                                ? 1
-                            : param.status == ParamStatus::kNotDisc ? 2 : 3];
+                ++out.split_for[SplitReason(param.status)];
                 for (uint32_t p = parts; p-- > 0;)
                     queue.push_front({ExtractChart(chart, half, p), depth + 1, {}});
                 clock.Lap(kSegment);
@@ -282,7 +243,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         // angle would.
         tile.normal = VertexNormals(chart.position, chart.triangles);
         for (size_t v = 0; v < tile.normal.size(); ++v) {
-            const Vec3f shared = normal_of(chart.vertex_id[v], tile.normal[v]);
+            const Vec3f shared = brick_normals.At(chart.vertex_id[v], tile.normal[v]);
             if (Dot(shared, tile.normal[v]) >= kCreaseCos)
                 tile.normal[v] = shared;
         }
@@ -324,7 +285,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             m.bbox_max = Max(m.bbox_max, p);
         }
         char name[64];
-        std::snprintf(name, sizeof(name), "/tiles/b%05u-%05zu.tile", brick, out.tile_files.size());
+        std::snprintf(name, sizeof(name), "/tiles/b%05u-%05u-%03zu.tile", brick, root,
+                      out.tile_files.size());
         std::string path = dir + name;
         WriteTile(path, tile);
         clock.Lap(kWrite);
@@ -341,6 +303,107 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         rec.bbox_min = m.bbox_min;
         rec.bbox_max = m.bbox_max;
         out.charts.push_back(rec);
+    }
+    return out;
+}
+
+}  // namespace
+
+BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const ChartBuildOptions& opt) {
+    BrickResult out;
+    StageClock clock(&out.stage_seconds);
+    std::vector<uint8_t> on_cut;
+    TriMesh mesh = LoadBrick(dir, brick, opt.cache_bytes, &on_cut);
+    clock.Lap(kLoad);
+    if (mesh.triangles.empty())
+        return out;
+    out.repair = Repair(mesh, on_cut, RepairOptions{});
+    // The caller keeps every brick's result to the end of the ingest: the report's counts,
+    // not its per-vertex cut flags (1 B per vertex of the whole mesh, 50 MB at 100M
+    // triangles: the ingest's peak grew with the mesh; bench/RESULTS.md, issue 16 session 12).
+    std::vector<uint8_t>().swap(out.repair.vertex_on_cut);
+    out.proxy_positions = mesh.position;
+    out.proxy_triangles.reserve(mesh.triangles.size() * 3);
+    for (const auto& t : mesh.triangles)
+        out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
+
+    // Normals over the whole repaired brick, so a vertex on a chart border has the same
+    // normal in every chart that holds it (per-chart normals made seams).
+    const BrickNormals brick_normals(mesh);
+
+    clock.Lap(kRepair);
+    SegmentOptions sopt;
+    sopt.max_chart_vertices = opt.max_chart_vertices;
+    sopt.lloyd_iterations = opt.lloyd_iterations;
+    SegmentReport sreport;
+    std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, &sreport);
+    ParamOptions popt;
+    popt.max_jacobian_deviation = opt.max_distortion;
+    popt.refine_options.max_iterations = opt.refine_iterations;
+    MergeReport mreport;
+    std::vector<ChartParam> merged_params;  // per chart after merging, when computed
+    std::vector<uint8_t> united;            // per chart after merging: 1 for a union
+    std::vector<double> parts_scale;        // per chart after merging: its parts' mean square
+    if (opt.merge_charts) {
+        MergeOptions mopt;
+        mopt.param = popt;
+        mopt.max_chart_vertices = opt.max_chart_vertices;
+        mopt.max_union_triangles = sopt.target_chart_faces;
+        // ResolutionFor rounds up from want / sqrt(2): a union under this scale gets a
+        // square of at most max_merged_resolution texels (and never more than
+        // max_resolution, so it keeps every light-map texel it asks for).
+        const uint32_t merged_res = std::min(opt.max_resolution, opt.max_merged_resolution);
+        mopt.max_scale = merged_res *
+                         (opt.merge_horizon_cells ? opt.max_union_texel : std::sqrt(2.0)) *
+                         opt.texel_size;
+        // The turn bound stays on 8 x 8 cells per union (texel_size 0): with cells of 8
+        // texels lucy merged to 86 charts but its error against the path tracer rose from
+        // 4.65 % to 6.33 %, its 512-texel charts' indirect light 18-24 % low from the
+        // solver's 32 x 32 emitter samples per chart (bench/RESULTS.md, "Issue 13 (session
+        // 9)"; docs/method.md, "Merging").
+        if (opt.merge_horizon_cells) {
+            mopt.texel_size = opt.texel_size;
+            mopt.min_resolution = opt.min_resolution;
+            mopt.max_resolution = opt.max_resolution;
+        }
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united, &parts_scale);
+    }
+
+    std::vector<Pending> roots;
+    {
+        std::vector<TriMesh> charts = ExtractCharts(mesh, chart_of);
+        roots.resize(charts.size());
+        for (size_t c = 0; c < charts.size(); ++c) {
+            roots[c].chart = std::move(charts[c]);
+            // A chart straight from the merge comes with its parameterization (the same
+            // bits ParameterizeChart would give here).
+            if (merged_params.size() == charts.size())
+                roots[c].param = std::move(merged_params[c]);
+            roots[c].united =
+                opt.merge_horizon_cells && united.size() == charts.size() && united[c];
+            if (roots[c].united)
+                roots[c].parts_scale = parts_scale[c];
+        }
+    }
+    clock.Lap(kSegment);
+    // The charts in parallel, largest first (a large chart left to the end would run
+    // alone); their tiles are listed in chart order, so the order of the work changes no
+    // byte.
+    const std::vector<uint32_t> order =
+        LargestFirst(roots.size(), [&](size_t c) { return roots[c].chart.triangles.size(); });
+    std::vector<RootResult> built(roots.size());
+    ParallelForInOrder(order, [&](uint32_t c) {
+        built[c] = BuildFromRoot(dir, brick, c, std::move(roots[c]), brick_normals, popt, opt);
+    });
+    uint64_t split_for[4] = {};
+    for (RootResult& r : built) {
+        out.charts.insert(out.charts.end(), r.charts.begin(), r.charts.end());
+        out.tile_files.insert(out.tile_files.end(), r.tile_files.begin(), r.tile_files.end());
+        out.splits += r.splits;
+        for (size_t k = 0; k < 4; ++k)
+            split_for[k] += r.split_for[k];
+        for (size_t k = 0; k < out.stage_seconds.size(); ++k)
+            out.stage_seconds[k] += r.stage_seconds[k];
     }
     // Where the charts come from (mebake -v): seeds, what the segmentation inserted,
     // split and merged, and what the parameterization split again.

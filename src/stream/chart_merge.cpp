@@ -17,6 +17,7 @@
 #include "core/parallel.h"
 #include "stream/geometry_image.h"
 #include "stream/topology.h"
+#include "stream/work_order.h"
 
 #include <algorithm>
 #include <cmath>
@@ -40,6 +41,7 @@ struct Geometry {
     std::vector<Vec3d> normal;  // per face, unit (raw: folds are read before any smoothing)
     std::vector<double> area;
     std::vector<uint32_t> twin;
+    std::vector<double> length;  // per half-edge: Borders reads it every round
 };
 
 Geometry Measure(const TriMesh& mesh) {
@@ -55,13 +57,18 @@ Geometry Measure(const TriMesh& mesh) {
         g.normal[f] = Normalize(n);
     }
     g.twin = BuildTwins(mesh.triangles, BuildEdgeGroups(mesh.triangles));
+    g.length.resize(3 * nf);
+    for (size_t h = 0; h < 3 * nf; ++h) {
+        const Tri& tri = mesh.triangles[h / 3];
+        g.length[h] =
+            Length(Vec3d(mesh.position[tri[(h + 1) % 3]]) - Vec3d(mesh.position[tri[h % 3]]));
+    }
     return g;
 }
 
 // Every border between two charts, scored, best first (ties by ids).
-std::vector<Border> Borders(const TriMesh& mesh, const Geometry& g,
-                            const std::vector<uint32_t>& chart, size_t chart_count,
-                            double fold_cos) {
+std::vector<Border> Borders(const Geometry& g, const std::vector<uint32_t>& chart,
+                            size_t chart_count, double fold_cos) {
     std::vector<Border> edges;
     std::vector<double> perimeter(chart_count, 0);
     std::vector<Vec3d> normal(chart_count);
@@ -72,9 +79,7 @@ std::vector<Border> Borders(const TriMesh& mesh, const Geometry& g,
     }
     for (uint32_t h = 0; h < 3 * chart.size(); ++h) {
         const uint32_t f = h / 3, t = g.twin[h];
-        const Tri& tri = mesh.triangles[f];
-        const double len = Length(Vec3d(mesh.position[tri[(h + 1) % 3]]) -
-                                  Vec3d(mesh.position[tri[h % 3]]));
+        const double len = g.length[h];
         if (t == kNoIndex || chart[t / 3] != chart[f]) {
             perimeter[chart[f]] += len;
         }
@@ -358,9 +363,10 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     // splits it) is left alone.
     st.live.resize(chart_count);
     st.joined.assign(chart_count, 0);
-    ParallelFor(0, int64_t(chart_count), [&](int64_t c) {
-        st.live[size_t(c)] = st.TryUnion(st.faces_of[size_t(c)], {});
-    });
+    // The trials start largest first, so that a large one does not run alone at the end
+    // (which thread runs a trial changes no result); so do each round's below.
+    ParallelForInOrder(LargestFirst(chart_count, [&](size_t c) { return st.faces_of[c].size(); }),
+                       [&](uint32_t c) { st.live[c] = st.TryUnion(st.faces_of[c], {}); });
     st.part_scale.resize(chart_count);
     for (size_t c = 0; c < chart_count; ++c)
         st.part_scale[c] = st.live[c].square >= 0 ? st.area[c] * st.live[c].param.scale : 0;
@@ -368,7 +374,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
     for (int round = 0; round < options.max_rounds; ++round) {
         size_t folds = 0;
         const std::vector<Border> picked =
-            st.Pick(Borders(mesh, g, chart, chart_count, fold_cos), &folds);
+            st.Pick(Borders(g, chart, chart_count, fold_cos), &folds);
         if (round == 0)
             report.rejected_fold = folds;
         if (picked.empty())
@@ -376,9 +382,11 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
         ++report.rounds;
         report.tried += picked.size();
         std::vector<Trial> trials(picked.size());
-        ParallelFor(0, int64_t(picked.size()), [&](int64_t i) {
-            const Border& e = picked[size_t(i)];
-            trials[size_t(i)] = st.TryUnion(st.faces_of[e.a], st.faces_of[e.b]);
+        const auto union_faces = [&](size_t i) {
+            return st.faces_of[picked[i].a].size() + st.faces_of[picked[i].b].size();
+        };
+        ParallelForInOrder(LargestFirst(picked.size(), union_faces), [&](uint32_t i) {
+            trials[i] = st.TryUnion(st.faces_of[picked[i].a], st.faces_of[picked[i].b]);
         });
         for (size_t i = 0; i < picked.size(); ++i) {
             const Border& e = picked[i];

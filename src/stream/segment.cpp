@@ -315,13 +315,23 @@ void FitAndReseed(const Surface& s, const Segmenter& seg, uint32_t min_faces,
         q.seed = kNoIndex;
         kept.push_back(q);
     }
+    // Each face's cost under its refitted proxy in parallel; the best face per proxy is
+    // then found in face order.
+    std::vector<float> cost(s.face_count());
+    ParallelFor(
+        0, int64_t(s.face_count()),
+        [&](int64_t f) {
+            const uint32_t p = remap[chart[size_t(f)]];
+            chart[size_t(f)] = p;
+            cost[size_t(f)] = p == kNoIndex ? 0.f : seg.Cost(uint32_t(f), kept[p]);
+        },
+        4096);
     std::vector<double> best(kept.size(), kInf);
     for (uint32_t f = 0; f < s.face_count(); ++f) {
-        const uint32_t p = remap[chart[f]];
-        chart[f] = p;
+        const uint32_t p = chart[f];
         if (p == kNoIndex)
             continue;
-        const double e = seg.Cost(f, kept[p]);
+        const double e = cost[f];
         if (e < best[p]) {
             best[p] = e;
             kept[p].seed = f;
@@ -432,11 +442,21 @@ ChartStats Stats(const Surface& s, const std::vector<Proxy>& proxies,
     st.farthest.assign(nc, kNoIndex);
     constexpr int kBins = 180;
     std::vector<double> hist(nc * kBins, 0.0), total(nc, 0.0), worst(nc, -1), far(nc, -1);
+    // Each face's angle to its proxy (the acos is most of the cost) in parallel; the sums
+    // below stay in face order.
+    std::vector<double> angle_of(s.face_count());
+    ParallelFor(
+        0, int64_t(s.face_count()),
+        [&](int64_t f) {
+            const Vec3d& n = proxies[chart[size_t(f)]].normal;
+            angle_of[size_t(f)] =
+                std::acos(std::clamp(Dot(s.normal[size_t(f)], n), -1.0, 1.0)) * 180 / kPi;
+        },
+        4096);
     for (uint32_t f = 0; f < s.face_count(); ++f) {
         const uint32_t c = chart[f];
         ++st.faces[c];
-        const double angle =
-            std::acos(std::clamp(Dot(s.normal[f], proxies[c].normal), -1.0, 1.0)) * 180 / kPi;
+        const double angle = angle_of[f];
         hist[c * kBins + std::min(kBins - 1, int(angle))] += s.area[f];
         total[c] += s.area[f];
         if (angle > worst[c]) {

@@ -1,5 +1,6 @@
 // A brick's charts: what BuildBrickCharts hands back to the ingest, which keeps it for
 // every brick until the chart pass ends.
+#include "core/parallel.h"
 #include "io/byte_stream.h"
 #include "io/mesh_format.h"
 #include "stream/bricks.h"
@@ -22,7 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // A wavy n x n grid of quads (2 n^2 triangles) as an ASCII PLY.
-void WriteGrid(const std::string& path, int n) {
+void WriteGrid(const std::string& path, int n, double amplitude = 0.05) {
     std::ofstream out(path);
     out << "ply\nformat ascii 1.0\nelement vertex " << (n + 1) * (n + 1)
         << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << 2 * n * n
@@ -30,7 +31,7 @@ void WriteGrid(const std::string& path, int n) {
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i <= n; ++i)
             out << double(i) / n << ' ' << double(j) / n << ' '
-                << 0.05 * std::sin(6.0 * i / n) * std::cos(5.0 * j / n) << '\n';
+                << amplitude * std::sin(6.0 * i / n) * std::cos(5.0 * j / n) << '\n';
     auto id = [n](int i, int j) { return j * (n + 1) + i; };
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
@@ -71,6 +72,60 @@ TEST(ChartBuilder, BrickResultKeepsNoPerVertexData) {
     // in it would grow with the mesh (the cut flags did: 50 MB at 100M triangles).
     EXPECT_TRUE(r.repair.vertex_on_cut.empty());
     EXPECT_EQ(r.repair.vertex_on_cut.capacity(), 0u);
+    fs::remove_all(dir);
+}
+
+// The charts of one brick are built in parallel (chart_builder.cpp, BuildFromRoot): the
+// tiles, their order and every record must not depend on the thread count, also when
+// charts are split (a distortion bound no wavy chart meets).
+TEST(ChartBuilder, ABricksChartsDoNotDependOnTheThreadCount) {
+    const fs::path dir =
+        fs::temp_directory_path() / ("mebake_chart_threads_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir / "tiles");
+    fs::create_directories(dir / "bricks");
+    const std::string ply = (dir / "grid.ply").string();
+    WriteGrid(ply, 30, 0.3);
+    SpillResult sr;
+    {
+        Spill spill(dir.string(), size_t(1) << 20);
+        auto in = io::InputStream::Open(ply);
+        io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
+        sr = spill.Finish();
+    }
+    ASSERT_EQ(BinFaces(dir.string(), sr, BinOptions{}).bricks.size(), 1u);
+    ChartBuildOptions o;
+    o.merge_charts = false;
+    o.max_distortion = 1e-4;
+    o.max_chart_vertices = 300;  // several charts from the segmentation
+    struct Built {
+        BrickResult result;
+        std::vector<std::string> tiles;  // each tile's bytes, in order
+    };
+    auto build = [&](int threads) {
+        ThreadLimit limit(threads);
+        Built b;
+        b.result = BuildBrickCharts(dir.string(), 0, o);
+        for (const std::string& path : b.result.tile_files) {
+            std::ifstream in(path, std::ios::binary);
+            b.tiles.emplace_back(std::istreambuf_iterator<char>(in),
+                                 std::istreambuf_iterator<char>());
+            fs::remove(path);
+        }
+        return b;
+    };
+    const Built one = build(1), two = build(2);
+    ASSERT_GE(one.result.charts.size(), 4u);
+    ASSERT_GT(one.result.splits, 0u) << "the test needs charts that are split";
+    EXPECT_EQ(one.result.splits, two.result.splits);
+    ASSERT_EQ(one.result.charts.size(), two.result.charts.size());
+    ASSERT_EQ(one.tiles.size(), one.result.charts.size());
+    EXPECT_EQ(one.result.tile_files, two.result.tile_files);
+    for (size_t c = 0; c < one.result.charts.size(); ++c) {
+        EXPECT_EQ(one.result.charts[c].triangles, two.result.charts[c].triangles) << c;
+        EXPECT_EQ(one.result.charts[c].scale, two.result.charts[c].scale) << c;
+        EXPECT_TRUE(one.tiles[c] == two.tiles[c]) << "tile " << c << " differs";
+    }
     fs::remove_all(dir);
 }
 
