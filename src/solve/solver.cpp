@@ -948,14 +948,18 @@ private:
                         NearPairs(em, p, i, j, row, texel_side, org, rays);
                         continue;
                     }
+                    // Below the point's horizon (a third of the pairs tested): TexelTransfer
+                    // fails, and so does FacetedTransfer unless a facet may rise above it
+                    // (BelowHorizon), so the facets' test is not needed to know it.
+                    if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
+                        (!faceted || BelowHorizon(g, rp.normal, t.spread)))
+                        continue;
                     Vec3d contrib;
                     int carrier = -1;
                     if (!faceted || FacetsAgree(g, t.spread)) {
                         if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
                             continue;
                     } else {
-                        if (BelowHorizon(g, rp.normal, t.spread))
-                            continue;  // FacetedTransfer's answer, without the facets
                         em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
                         if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
                                              &contrib, &carrier))
