@@ -956,42 +956,50 @@ private:
         // Near pairs of the finest samples take their children (NearPairs).
         const bool near = ls == top && !em.near.empty();
         const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * texel_side, 2);
+        // The region's samples that can emit, in pair order, their centre and normal in
+        // double once per link instead of once per pair (GeometryOf's arithmetic).
+        region_texels_.clear();
+        for (uint32_t b = 0; b < span; ++b)
+            for (uint32_t a = 0; a < span; ++a) {
+                const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
+                const auto& t = texels[k];
+                if (t.area > 0 && t.db_max > 0)
+                    region_texels_.push_back({i, j, k, Vec3d(t.pos), Vec3d(t.nrm)});
+            }
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
             if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
                          RegionFacesAway(rp.position, region)))
                 continue;  // every pair's horizon or facing test would fail
-            for (uint32_t b = 0; b < span; ++b) {
-                for (uint32_t a = 0; a < span; ++a) {
-                    const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
-                    const auto& t = texels[k];
-                    if (t.area <= 0 || t.db_max <= 0)
-                        continue;
-                    const TexelSource src{t.pos, t.nrm, t.area};
-                    const PairGeometry g = GeometryOf(rp.position, src);
-                    if (near && g.r2 < near_r2) {
-                        NearPairs(em, p, i, j, row, texel_side);
-                        continue;
-                    }
-                    // Below the point's horizon (a third of the pairs tested): TexelTransfer
-                    // fails, and so does FacetedTransfer unless a facet may rise above it
-                    // (BelowHorizon), so the facets' test is not needed to know it.
-                    if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
-                        (!faceted || BelowHorizon(g, rp.normal, t.spread)))
-                        continue;
-                    Vec3d contrib;
-                    int carrier = -1;
-                    if (!faceted || FacetsAgree(g, t.spread)) {
-                        if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
-                            continue;
-                    } else {
-                        em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
-                        if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
-                                             &contrib, &carrier))
-                            continue;
-                    }
-                    pairs_.push_back({p, k, Vec3f(contrib), int8_t(carrier)});
+            const Vec3d x(rp.position);
+            for (const RegionTexel& rt : region_texels_) {
+                const uint32_t i = rt.i, j = rt.j, k = rt.k;
+                const auto& t = texels[k];
+                const TexelSource src{t.pos, t.nrm, t.area};
+                const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, src), to the bit
+                const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
+                if (near && g.r2 < near_r2) {
+                    NearPairs(em, p, i, j, row, texel_side);
+                    continue;
                 }
+                // Below the point's horizon (a third of the pairs tested): TexelTransfer
+                // fails, and so does FacetedTransfer unless a facet may rise above it
+                // (BelowHorizon), so the facets' test is not needed to know it.
+                if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
+                    (!faceted || BelowHorizon(g, rp.normal, t.spread)))
+                    continue;
+                Vec3d contrib;
+                int carrier = -1;
+                if (!faceted || FacetsAgree(g, t.spread)) {
+                    if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
+                        continue;
+                } else {
+                    em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
+                    if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
+                                         &contrib, &carrier))
+                        continue;
+                }
+                pairs_.push_back({p, k, Vec3f(contrib), int8_t(carrier)});
             }
         }
     }
@@ -1060,6 +1068,11 @@ private:
         uint32_t point, texel;
     };
     std::vector<SplitPair> split_pairs_;  // SplitVisibility's pairs, in trace order
+    struct RegionTexel {
+        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
+        Vec3d pos, nrm;
+    };
+    std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1
