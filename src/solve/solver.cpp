@@ -533,15 +533,15 @@ private:
         uint32_t point;
         uint32_t texel;  // kNearTexel set: Emitter::near[texel & ~kNearTexel]
         Vec3f contribution;  // E per unit radiosity of the texel
+        int8_t carrier;      // its ray ends at the sample (-1) or at this facet (FacetedTransfer)
     };
     static constexpr uint32_t kNearTexel = 1u << 31;
     struct Deferred {  // a link made, not yet summed (EvaluateLink, Resolve)
         uint32_t node, points;  // receiver node, its first point in set_pts_ (ng^2 of them)
-        const std::vector<Emitter::Texel>* texels;  // the emitter level sampled
-        const std::vector<Emitter::Texel>* near;    // Emitter::near
-        float vis;                                   // < 0: one ray per pair
-        size_t pair0, pair1;                         // its pairs_
-        size_t seg0;  // its first segment in batch_ (vis < 0: one per pair)
+        const Emitter* em;
+        int ls;    // the emitter level sampled
+        float vis; // < 0: one ray per pair
+        size_t pair0, pair1;  // its pairs_
     };
 
     // What the error-driven stop knows of node n's receiver points (cached per node): the
@@ -608,18 +608,18 @@ private:
     // One link: the emitter texels at level `ls` inside region lk, at the receiver node's
     // Gauss points; adds the projection to the node's pending set. vis < 0: one ray per
     // pair; otherwise every pair is weighted by vis (a cluster link's estimate). The link
-    // waits with its pairs and segments until link_defer_pairs have gathered (Resolve).
+    // waits with its pairs until link_defer_pairs have gathered (Resolve).
     void EvaluateLink(size_t n, const Emitter& em, const Link& lk, int ls, float vis = -1) {
         NodePoints(n);
-        Deferred d{uint32_t(n), 0, &em.levels[size_t(ls)], &em.near, vis, pairs_.size(), 0,
-                   batch_.size()};
-        CollectPairs(em, lk, ls, vis < 0);
+        Deferred d{uint32_t(n), 0, &em, ls, vis, pairs_.size(), 0};
+        CollectPairs(em, lk, ls);
         d.pair1 = pairs_.size();
         if (d.pair1 == d.pair0)
             return;  // no pair carries light (lucy: half the candidate pairs are in such links)
         if (n != set_node_) {  // the same node's points serve every emitter
             set_pts_.insert(set_pts_.end(), pts_.begin(), pts_.end());
             set_albedo_.insert(set_albedo_.end(), albedo_.begin(), albedo_.end());
+            set_bounds_.insert(set_bounds_.end(), bounds_.begin(), bounds_.end());
             set_node_ = n;
         }
         d.points = uint32_t(set_pts_.size() - pts_.size());
@@ -649,15 +649,15 @@ private:
                 continue;
             const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
             if (probes < 2)
-                probe_.segments.insert(probe_.segments.end(), &batch_.segments[d.seg0],
-                                       &batch_.segments[d.seg0] + n);
+                for (size_t q = d.pair0; q < d.pair1; ++q)
+                    AddLinkSegment(d, q, &probe_);
             else
                 for (size_t k = 0; k < probes; ++k)
-                    probe_.segments.push_back(batch_.segments[d.seg0 + ProbePair(k, n, probes)]);
+                    AddLinkSegment(d, d.pair0 + ProbePair(k, n, probes), &probe_);
         }
         probe_.Trace(s_.vis_, RayKind::kLink);
-        // The partial links' other pairs; every pair's answer into batch_.occluded.
-        batch_.occluded.assign(batch_.size(), 0);
+        // The partial links' other pairs; every pair's answer into occluded_.
+        occluded_.assign(pairs_.size(), 0);
         rest_.Clear();
         std::vector<uint8_t> partial(deferred_.size(), 0);
         for (size_t at = 0, i = 0; i < deferred_.size(); ++i) {
@@ -665,7 +665,7 @@ private:
             if (d.vis >= 0)
                 continue;
             const size_t n = d.pair1 - d.pair0, probes = probe_count(d);
-            uint8_t* occ = &batch_.occluded[d.seg0];
+            uint8_t* occ = &occluded_[d.pair0];
             if (probes < 2) {
                 std::copy(&probe_.occluded[at], &probe_.occluded[at] + n, occ);
                 at += n;
@@ -681,7 +681,7 @@ private:
                     if (k < probes && q == ProbePair(k, n, probes))
                         occ[q] = probe_.occluded[at + k++];
                     else
-                        rest_.segments.push_back(batch_.segments[d.seg0 + q]);
+                        AddLinkSegment(d, d.pair0 + q, &rest_);
                 }
             }
             at += probes;
@@ -696,17 +696,44 @@ private:
                 if (k < probes && q == ProbePair(k, n, probes))
                     ++k;
                 else
-                    batch_.occluded[d.seg0 + q] = rest_.occluded[r++];
+                    occluded_[d.pair0 + q] = rest_.occluded[r++];
             }
         }
         for (const Deferred& d : deferred_)
             SumLink(d);
         deferred_.clear();
         pairs_.clear();
-        batch_.Clear();
         set_pts_.clear();
         set_albedo_.clear();
+        set_bounds_.clear();
         set_node_ = SIZE_MAX;
+    }
+
+    // The emitter sample of a link's pair.
+    static const Emitter::Texel& Sample(const Deferred& d, const Pair& pr) {
+        return pr.texel & kNearTexel ? d.em->near[pr.texel & ~kNearTexel]
+                                     : d.em->levels[size_t(d.ls)][pr.texel];
+    }
+
+    // Pair q's link ray (of link d), into `out`: built only for the pairs traced, the
+    // probes and the partial links' others (most links are settled by their probes, and
+    // building every pair's segment was 3 % of the bounce pass). The same segment as
+    // built at the pair, from the same points, samples and bounds.
+    void AddLinkSegment(const Deferred& d, size_t q, SegmentBatch* out) {
+        const Pair& pr = pairs_[q];
+        const ReceiverPoint& rp = set_pts_[d.points + pr.point];
+        const SampleBound& at = set_bounds_[d.points + pr.point];
+        const Emitter::Texel& t = Sample(d, pr);
+        const Vec3f org = rp.vis_point + rp.normal * eps_;
+        if (pr.carrier < 0) {
+            out->AddSegmentBetween(org, t.vis + t.nrm * eps_, at, {t.vis, t.nrm, t.radius, t.relief});
+            return;
+        }
+        const uint32_t row = 1u << d.ls;
+        d.em->FacetsOf(d.ls, pr.texel % row, pr.texel / row, facets_.data(), facet_vis_.data());
+        const size_t c = size_t(pr.carrier);
+        out->AddSegmentBetween(org, facet_vis_[c] + facets_[c].nrm * eps_, at,
+                               {t.vis, t.nrm, 0.5f * t.radius, t.relief});
     }
 
     // A resolved link's light at its node's Gauss points, added to the node's sum.
@@ -716,11 +743,10 @@ private:
         const std::span<const Vec3f> albedo(&set_albedo_[d.points], np);
         e9_.assign(np * 9, 0.f);
         for (size_t q = d.pair0; q < d.pair1; ++q) {
-            if (d.vis < 0 && batch_.occluded[d.seg0 + (q - d.pair0)])
+            if (d.vis < 0 && occluded_[q])
                 continue;
             const Pair& pr = pairs_[q];
-            const Vec3f& tdb = pr.texel & kNearTexel ? (*d.near)[pr.texel & ~kNearTexel].db
-                                                     : (*d.texels)[pr.texel].db;
+            const Vec3f& tdb = Sample(d, pr).db;
             const Vec3f db = d.vis < 0 ? tdb : tdb * d.vis;
             for (int c = 0; c < 3; ++c)
                 for (int k = 0; k < 3; ++k)
@@ -912,11 +938,11 @@ private:
     }
 
     // Every (Gauss point, texel of the region) pair that can carry light, with its
-    // transfer (transfer.h) and its visibility segment, appended to pairs_ and batch_. A
+    // transfer (transfer.h), appended to pairs_ (its ray's end in Pair::carrier). A
     // sample's facets are read only for the pairs where they may not all face the receiver
     // point the same way (FacetsAgree); the others take TexelTransfer's answer, which
     // FacetedTransfer would give them.
-    void CollectPairs(const Emitter& em, const Link& lk, int ls, bool rays) {
+    void CollectPairs(const Emitter& em, const Link& lk, int ls) {
         const auto& texels = em.levels[size_t(ls)];
         const int top = int(em.levels.size()) - 1;
         const bool faceted = ls < top || !em.facets.empty();
@@ -930,50 +956,50 @@ private:
         // Near pairs of the finest samples take their children (NearPairs).
         const bool near = ls == top && !em.near.empty();
         const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * texel_side, 2);
+        // The region's samples that can emit, in pair order, their centre and normal in
+        // double once per link instead of once per pair (GeometryOf's arithmetic).
+        region_texels_.clear();
+        for (uint32_t b = 0; b < span; ++b)
+            for (uint32_t a = 0; a < span; ++a) {
+                const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
+                const auto& t = texels[k];
+                if (t.area > 0 && t.db_max > 0)
+                    region_texels_.push_back({i, j, k, Vec3d(t.pos), Vec3d(t.nrm)});
+            }
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
             if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
                          RegionFacesAway(rp.position, region)))
                 continue;  // every pair's horizon or facing test would fail
-            const Vec3f org = rp.vis_point + rp.normal * eps_;
-            for (uint32_t b = 0; b < span; ++b) {
-                for (uint32_t a = 0; a < span; ++a) {
-                    const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
-                    const auto& t = texels[k];
-                    if (t.area <= 0 || t.db_max <= 0)
-                        continue;
-                    const TexelSource src{t.pos, t.nrm, t.area};
-                    const PairGeometry g = GeometryOf(rp.position, src);
-                    if (near && g.r2 < near_r2) {
-                        NearPairs(em, p, i, j, row, texel_side, org, rays);
-                        continue;
-                    }
-                    Vec3d contrib;
-                    int carrier = -1;
-                    if (!faceted || FacetsAgree(g, t.spread)) {
-                        if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
-                            continue;
-                    } else {
-                        if (BelowHorizon(g, rp.normal, t.spread))
-                            continue;  // FacetedTransfer's answer, without the facets
-                        em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
-                        if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
-                                             &contrib, &carrier))
-                            continue;
-                    }
-                    pairs_.push_back({p, k, Vec3f(contrib)});
-                    if (!rays)
-                        continue;
-                    if (carrier < 0)
-                        batch_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
-                                                 {t.vis, t.nrm, t.radius, t.relief});
-                    else
-                        batch_.AddSegmentBetween(org,
-                                                 facet_vis_[size_t(carrier)] +
-                                                     facets_[size_t(carrier)].nrm * eps_,
-                                                 bounds_[p],
-                                                 {t.vis, t.nrm, 0.5f * t.radius, t.relief});
+            const Vec3d x(rp.position);
+            for (const RegionTexel& rt : region_texels_) {
+                const uint32_t i = rt.i, j = rt.j, k = rt.k;
+                const auto& t = texels[k];
+                const TexelSource src{t.pos, t.nrm, t.area};
+                const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, src), to the bit
+                const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
+                if (near && g.r2 < near_r2) {
+                    NearPairs(em, p, i, j, row, texel_side);
+                    continue;
                 }
+                // Below the point's horizon (a third of the pairs tested): TexelTransfer
+                // fails, and so does FacetedTransfer unless a facet may rise above it
+                // (BelowHorizon), so the facets' test is not needed to know it.
+                if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
+                    (!faceted || BelowHorizon(g, rp.normal, t.spread)))
+                    continue;
+                Vec3d contrib;
+                int carrier = -1;
+                if (!faceted || FacetsAgree(g, t.spread)) {
+                    if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
+                        continue;
+                } else {
+                    em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
+                    if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
+                                         &contrib, &carrier))
+                        continue;
+                }
+                pairs_.push_back({p, k, Vec3f(contrib), int8_t(carrier)});
             }
         }
     }
@@ -985,7 +1011,7 @@ private:
     // against its point form; the near form's square fixes the shape, not the radiosity or
     // the relief varying across it), and a slot's walls trade their light at that range.
     void NearPairs(const Emitter& em, uint32_t p, uint32_t i, uint32_t j, uint32_t row,
-                   double texel_side, const Vec3f& org, bool rays) {
+                   double texel_side) {
         const ReceiverPoint& rp = pts_[p];
         const uint32_t nrow = 2 * row;
         for (uint32_t c = 0; c < 4; ++c) {
@@ -997,10 +1023,7 @@ private:
             if (!TexelTransfer(rp.position, rp.normal, {t.pos, t.nrm, t.area}, 0.5 * texel_side,
                                &contrib))
                 continue;
-            pairs_.push_back({p, k | kNearTexel, Vec3f(contrib)});
-            if (rays)
-                batch_.AddSegmentBetween(org, t.vis + t.nrm * eps_, bounds_[p],
-                                         {t.vis, t.nrm, t.radius, t.relief});
+            pairs_.push_back({p, k | kNearTexel, Vec3f(contrib), -1});
         }
     }
 
@@ -1030,18 +1053,26 @@ private:
     std::vector<SampleBound> bounds_cache_;
     std::vector<ReceiverPoint> set_pts_;  // the deferred links' receiver points, ng^2 a node
     std::vector<Vec3f> set_albedo_;
+    std::vector<SampleBound> set_bounds_;  // and their ReceiverBounds()
     std::vector<Deferred> deferred_;     // links waiting for their rays, in link order
-    // Their pairs and segments (at most SolveOptions::link_defer_pairs, plus one link's): ~60 B
-    // a pair here and ~100 in the paged visibility, ~2.5 MB per gathering thread at 16K.
+    // Their pairs (at most SolveOptions::link_defer_pairs, plus one link's): 25 B a pair here
+    // (its answer in occluded_), a traced pair's segment 32 B and ~100 in the paged
+    // visibility: at most ~2.5 MB per gathering thread at 16K, less where probes settle links.
     std::vector<Pair> pairs_;
     std::array<TexelSource, 4> facets_;  // Emitter::FacetsOf()
     std::array<Vec3f, 4> facet_vis_;
     std::vector<float> e9_, vals_, coeffs_;
-    SegmentBatch batch_, probe_, rest_;
+    SegmentBatch probe_, rest_;
+    std::vector<uint8_t> occluded_;  // per pair of pairs_ (Resolve)
     struct SplitPair {
         uint32_t point, texel;
     };
     std::vector<SplitPair> split_pairs_;  // SplitVisibility's pairs, in trace order
+    struct RegionTexel {
+        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
+        Vec3d pos, nrm;
+    };
+    std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1

@@ -181,6 +181,38 @@ TEST(Transfer, FacetsAgreeOnlyWhereEveryFacetFacesThePointOneWay) {
     EXPECT_GT(far_agreed, 0.85 * far_points) << far_agreed << " of " << far_points;
 }
 
+// FacetsAgree compares squares (no root): it must decide as the test with the root,
+// side > offset + sqrt(r2) x tilt, everywhere but within its 1e-9 widening of the bound, or
+// the gather would read more facets than before (the bytes are the same either way: the
+// test above). Random sides, distances and spreads, some on the bound itself.
+TEST(Transfer, FacetsAgreeWithoutTheRootDecidesAsWithIt) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int agreed = 0, differ = 0;
+    for (int trial = 0; trial < 200000; ++trial) {
+        PairGeometry g;
+        g.r2 = std::pow(10.0, 6 * u(rng) - 3);
+        FacetSpread spread;
+        spread.offset = float(trial % 7 == 0 ? 0.0 : 0.01 * u(rng));
+        spread.tilt = float(trial % 5 == 0 ? 0.0 : u(rng));
+        const double bound = spread.offset + std::sqrt(g.r2) * spread.tilt;
+        g.ce = (trial % 2 ? 1 : -1) *
+               (trial % 100 == 0 ? bound * (1 + (u(rng) - 0.5) * 1e-12) : 2 * bound * u(rng));
+        const bool rooted = std::abs(g.ce) > spread.offset &&
+                            std::abs(g.ce) > spread.offset + std::sqrt(g.r2) * spread.tilt;
+        const bool squared = FacetsAgree(g, spread);
+        agreed += squared ? 1 : 0;
+        if (squared == rooted)
+            continue;
+        ++differ;
+        // Only a hair from the bound, and only ever on the safe side (reading the facets).
+        EXPECT_TRUE(rooted) << "trial " << trial;
+        EXPECT_LT(std::abs(std::abs(g.ce) - bound), 1e-8 * (bound + 1e-300)) << "trial " << trial;
+    }
+    EXPECT_GT(agreed, 50000);
+    EXPECT_LT(differ, 2000);
+}
+
 // BelowHorizon lets the gather skip the facets of a sample below a receiver's horizon:
 // wherever it says so, FacetedTransfer must return false (random samples of four facets as
 // above, receivers near them with random normals, some within the rounding margin), and it
