@@ -16,7 +16,8 @@ using Key = std::tuple<float, uint32_t, uint32_t>;  // (cost, face, proxy), as t
 using Reference = std::priority_queue<Key, std::vector<Key>, std::greater<Key>>;
 
 // Pushes and pops interleaved like a flood (a pop, then a few pushes), from a small set
-// of costs and faces so that equal costs, equal (cost, face) and exact duplicates occur.
+// of costs and faces so that equal costs, equal (cost, face) and exact duplicates occur,
+// and pushes below the last pop.
 TEST(FloodQueue, PopsInTheOrderOfAStdPriorityQueueTiesIncluded) {
     std::mt19937 rng(7);
     const float costs[] = {0.0f, 1e-30f, 0.25f, 0.5f, 0.5000001f, 3.0f, 1e30f,
@@ -40,6 +41,9 @@ TEST(FloodQueue, PopsInTheOrderOfAStdPriorityQueueTiesIncluded) {
         queue.pop();
         reference.pop();
         ++pops;
+        if (!reference.empty() && round % 2 == 0) {  // a peek before the next pushes, as
+            ASSERT_EQ(queue.top_face(), std::get<1>(reference.top()));  // the flood's prefetch
+        }
     }
     while (!reference.empty()) {
         const FloodQueue::Entry e = queue.top();
