@@ -14,10 +14,10 @@ namespace mebake::stream {
 // faces. (cost, face) is one 64-bit key (a non-negative float's bits order like its
 // value; a NaN sorts last). The flood's pops are nearly monotone (a face's cost grows
 // with its distance from the proxy: ~3 % of pushes are below the last pop on the scans),
-// so this is a radix heap (Ahuja et al. 1990): bucket i > 0 holds the keys whose highest
-// bit differing from the last popped key is bit i-1, bucket 0 the keys equal to it. A push
-// is an append; a pop that finds bucket 0 empty moves the least non-empty bucket's keys
-// down, each key at most 64 times in all. Keys below the last pop go to a small binary
+// so this is a radix heap (Ahuja et al. 1990) on the cost's bits: bucket i > 0 holds the
+// entries whose highest cost bit differing from the last popped cost is bit i-1, bucket 0
+// those of equal cost. A push is an append; a pop that finds bucket 0 empty moves the
+// least non-empty bucket's entries down, each at most 32 times in all. Keys below the last pop go to a small binary
 // heap, popped first (they are below everything in the buckets).
 class FloodQueue {
 public:
@@ -41,7 +41,7 @@ public:
             const size_t b = Bucket(item.key);
             buckets_[b].push_back(item);
             if (b == 0)
-                least_ = kUnknown;  // it may hold a lesser proxy
+                least_ = kUnknown;  // it may be the lesser one
         }
     }
 
@@ -83,8 +83,10 @@ private:
         std::memcpy(&cost, &bits, sizeof cost);
         return {cost, uint32_t(item.key), item.proxy};
     }
+    // By the cost's bits only: equal costs share bucket 0, where the least (face, proxy) wins.
     size_t Bucket(uint64_t key) const {
-        return key == last_ ? 0 : size_t(64 - __builtin_clzll(key ^ last_));
+        const uint32_t diff = uint32_t(key >> 32) ^ uint32_t(last_ >> 32);
+        return diff == 0 ? 0 : size_t(32 - __builtin_clz(diff));
     }
 
     // Makes the least entry the one at least_ in bucket 0, unless below_ has entries.
@@ -104,18 +106,18 @@ private:
                 buckets_[Bucket(item.key)].push_back(item);  // each lands below i
             from.clear();
         }
-        // Bucket 0's keys all equal last_: the least proxy goes first.
+        // Bucket 0's costs all equal last_'s: the least (face, proxy) goes first.
         const std::vector<Item>& b = buckets_[0];
         least_ = 0;
         for (size_t j = 1; j < b.size(); ++j)
-            if (b[j].proxy < b[least_].proxy)
+            if (Greater(b[least_], b[j]))
                 least_ = j;
     }
 
-    std::array<std::vector<Item>, 65> buckets_;
+    std::array<std::vector<Item>, 33> buckets_;
     std::vector<Item> below_;  // a min-heap of keys below last_
     uint64_t last_ = 0;        // the last key moved into bucket 0
-    size_t least_ = kUnknown;  // bucket 0's least proxy, once known
+    size_t least_ = kUnknown;  // bucket 0's least entry, once known
     size_t size_ = 0;
 };
 
