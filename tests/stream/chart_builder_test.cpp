@@ -40,21 +40,28 @@ void WriteGrid(const std::string& path, int n, double amplitude = 0.05) {
         }
 }
 
-TEST(ChartBuilder, BrickResultKeepsNoPerVertexData) {
-    const fs::path dir =
-        fs::temp_directory_path() / ("mebake_chart_builder_" + std::to_string(::getpid()));
+// A fresh work directory (with tiles/ and bricks/) named for the test and the process.
+fs::path WorkDir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir / "tiles");
     fs::create_directories(dir / "bricks");
+    return dir;
+}
+
+// Spills the PLY at ply into dir, as the ingest's first pass does.
+SpillResult SpillPly(const fs::path& dir, const std::string& ply) {
+    Spill spill(dir.string(), size_t(1) << 20);
+    auto in = io::InputStream::Open(ply);
+    io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
+    return spill.Finish();
+}
+
+TEST(ChartBuilder, BrickResultKeepsNoPerVertexData) {
+    const fs::path dir = WorkDir("mebake_chart_builder");
     const std::string ply = (dir / "grid.ply").string();
     WriteGrid(ply, 40);  // 3200 triangles
-    SpillResult sr;
-    {
-        Spill spill(dir.string(), size_t(1) << 20);
-        auto in = io::InputStream::Open(ply);
-        io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
-        sr = spill.Finish();
-    }
+    const SpillResult sr = SpillPly(dir, ply);
     BinOptions bopt;
     bopt.max_faces = 1000;  // several bricks, so each has vertices on a cut
     const BrickPlan plan = BinFaces(dir.string(), sr, bopt);
@@ -79,20 +86,10 @@ TEST(ChartBuilder, BrickResultKeepsNoPerVertexData) {
 // tiles, their order and every record must not depend on the thread count, also when
 // charts are split (a distortion bound no wavy chart meets).
 TEST(ChartBuilder, ABricksChartsDoNotDependOnTheThreadCount) {
-    const fs::path dir =
-        fs::temp_directory_path() / ("mebake_chart_threads_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir / "tiles");
-    fs::create_directories(dir / "bricks");
+    const fs::path dir = WorkDir("mebake_chart_threads");
     const std::string ply = (dir / "grid.ply").string();
     WriteGrid(ply, 30, 0.3);
-    SpillResult sr;
-    {
-        Spill spill(dir.string(), size_t(1) << 20);
-        auto in = io::InputStream::Open(ply);
-        io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
-        sr = spill.Finish();
-    }
+    const SpillResult sr = SpillPly(dir, ply);
     ASSERT_EQ(BinFaces(dir.string(), sr, BinOptions{}).bricks.size(), 1u);
     ChartBuildOptions o;
     o.merge_charts = false;
@@ -156,20 +153,10 @@ void WriteHalfCylinder(const std::string& path, int n) {
 // merged 512-texel chart's geometry samples 4 texels wide: the turbine blade's thin edges
 // came out 45-74 % dark); a chart that is not a union keeps the common cap.
 TEST(ChartBuilder, AUnionsGeometryFollowsItsTexels) {
-    const fs::path dir =
-        fs::temp_directory_path() / ("mebake_union_geometry_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir / "tiles");
-    fs::create_directories(dir / "bricks");
+    const fs::path dir = WorkDir("mebake_union_geometry");
     const std::string ply = (dir / "cyl.ply").string();
     WriteHalfCylinder(ply, 40);
-    SpillResult sr;
-    {
-        Spill spill(dir.string(), size_t(1) << 20);
-        auto in = io::InputStream::Open(ply);
-        io::ReadMesh(*in, io::MeshFormat::Ply, spill.BeginInput(ply));
-        sr = spill.Finish();
-    }
+    const SpillResult sr = SpillPly(dir, ply);
     ASSERT_EQ(BinFaces(dir.string(), sr, BinOptions{}).bricks.size(), 1u);
 
     ChartBuildOptions o;
