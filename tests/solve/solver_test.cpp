@@ -335,19 +335,39 @@ TEST(Solver, ClosedCubeWithEmittersInGroupsOfTwo) {
     CheckClosedCube(2);
 }
 
-TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
-    TestScene ts;
+// A 1 x 1 light at y = 2 facing down over a 6 x 6 black floor at y = 0 (a chart, 128
+// quads a side) and a 0.8 x 0.8 occluder at y = 1 (visibility only). Returns the light.
+PolygonLight AddSquareOccluderScene(TestScene& ts) {
     ts.scene.per_input = {{Mat(0.0f)}};
-    PolygonLight light;  // 1 x 1 at y = 2 facing down
+    PolygonLight light;
     light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
     light.radiance = {1, 1, 1};
     ts.scene.lights.push_back(light);
-    // Floor 6 x 6 at y = 0 (a chart) and a 0.8 x 0.8 occluder at y = 1 (visibility only).
     ts.Add(MakePatch([](double u, double v) { return Vec3d(6 * u - 3, 0, 3 - 6 * v); }, 128, 0, 6));
     std::vector<float> occ = {-0.4f, 1, -0.4f, 0.4f, 1, -0.4f, 0.4f, 1, 0.4f, -0.4f, 1, 0.4f};
     std::vector<uint32_t> occ_tris = {0, 1, 2, 0, 2, 3};
     ts.vis.AddTriangles(occ, occ_tris, "occluder");
     ts.vis.Commit();
+    return light;
+}
+
+// The exact E at floor point (x, 0, z) of AddSquareOccluderScene: the light minus the
+// occluder's shadow on the light's plane, seen from the point (central projection through
+// y = 1 onto y = 2 doubles distances from it).
+double ExactBehindSquareOccluder(const PolygonLight& light, double x, double z) {
+    const Vec3d p(x, 0, z);
+    const double x0 = std::max(-0.5, x + 2 * (-0.4 - x)), x1 = std::min(0.5, x + 2 * (0.4 - x));
+    const double z0 = std::max(-0.5, z + 2 * (-0.4 - z)), z1 = std::min(0.5, z + 2 * (0.4 - z));
+    const double full = IrradianceClipped(light.vertices, 1.0, p, Vec3d(0, 1, 0));
+    if (x0 >= x1 || z0 >= z1)
+        return full;
+    const std::vector<Vec3d> hidden = {{x0, 2, z0}, {x1, 2, z0}, {x1, 2, z1}, {x0, 2, z1}};
+    return full - IrradianceClipped(hidden, 1.0, p, Vec3d(0, 1, 0));
+}
+
+TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
+    TestScene ts;
+    const PolygonLight light = AddSquareOccluderScene(ts);
     SolveOptions opt;
     opt.settings.max_bounces = 0;
     opt.settings.tolerance = 2e-3;
@@ -366,18 +386,7 @@ TEST(Solver, OccluderCastsExactUmbraAndMonotonePenumbra) {
         double exact = IrradianceClipped(light.vertices, 1.0, Vec3d(x, 0, 0.1), Vec3d(0, 1, 0));
         EXPECT_NEAR(at(x, 0.1), exact, 0.005 * exact) << x;
     }
-    // Exact penumbra: the light minus the occluder's shadow on the light's plane, seen
-    // from x (central projection through y = 1 onto y = 2 doubles distances from x).
-    auto exact = [&](double x, double z) {
-        const Vec3d p(x, 0, z);
-        double x0 = std::max(-0.5, x + 2 * (-0.4 - x)), x1 = std::min(0.5, x + 2 * (0.4 - x));
-        double z0 = std::max(-0.5, z + 2 * (-0.4 - z)), z1 = std::min(0.5, z + 2 * (0.4 - z));
-        double full = IrradianceClipped(light.vertices, 1.0, p, Vec3d(0, 1, 0));
-        if (x0 >= x1 || z0 >= z1)
-            return full;
-        std::vector<Vec3d> hidden = {{x0, 2, z0}, {x1, 2, z0}, {x1, 2, z1}, {x0, 2, z1}};
-        return full - IrradianceClipped(hidden, 1.0, p, Vec3d(0, 1, 0));
-    };
+    auto exact = [&](double x, double z) { return ExactBehindSquareOccluder(light, x, z); };
     // Monotone where the exact answer is (near its outer edge the growing distance to
     // the light wins over the shrinking shadow and the exact value falls too).
     double prev = at(0.3, 0), prev_exact = exact(0.3, 0), worst = 0;
@@ -404,17 +413,7 @@ TEST(Solver, InheritedProbeStatesCostFewerRaysAndKeepThePenumbra) {
     };
     auto solve = [](bool inherit) {
         TestScene ts;
-        ts.scene.per_input = {{Mat(0.0f)}};
-        PolygonLight light;
-        light.vertices = {{-0.5, 2, -0.5}, {0.5, 2, -0.5}, {0.5, 2, 0.5}, {-0.5, 2, 0.5}};
-        light.radiance = {1, 1, 1};
-        ts.scene.lights.push_back(light);
-        ts.Add(MakePatch([](double u, double v) { return Vec3d(6 * u - 3, 0, 3 - 6 * v); }, 128,
-                         0, 6));
-        std::vector<float> occ = {-0.4f, 1, -0.4f, 0.4f, 1, -0.4f, 0.4f, 1, 0.4f, -0.4f, 1, 0.4f};
-        std::vector<uint32_t> occ_tris = {0, 1, 2, 0, 2, 3};
-        ts.vis.AddTriangles(occ, occ_tris, "occluder");
-        ts.vis.Commit();
+        const PolygonLight light = AddSquareOccluderScene(ts);
         SolveOptions opt;
         opt.settings.max_bounces = 0;
         opt.settings.light_probes_inherit = inherit;
@@ -430,17 +429,9 @@ TEST(Solver, InheritedProbeStatesCostFewerRaysAndKeepThePenumbra) {
         };
         const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(1.6, 0, 0), Vec3d(0, 1, 0));
         r.umbra = std::abs(at(0, 0)) / lit;
-        for (double x = 0.4; x <= 1.3; x += 0.05) {
-            const Vec3d p(x, 0, 0);
-            const double x0 = std::max(-0.5, x + 2 * (-0.4 - x)), x1 = std::min(0.5, x + 2 * (0.4 - x));
-            double exact = IrradianceClipped(light.vertices, 1.0, p, Vec3d(0, 1, 0));
-            if (x0 < x1) {  // the occluder's shadow on the light's plane, seen from p
-                const std::vector<Vec3d> hidden = {
-                    {x0, 2, -0.5}, {x1, 2, -0.5}, {x1, 2, 0.5}, {x0, 2, 0.5}};
-                exact -= IrradianceClipped(hidden, 1.0, p, Vec3d(0, 1, 0));
-            }
-            r.worst = std::max(r.worst, std::abs(at(x, 0) - exact) / lit);
-        }
+        for (double x = 0.4; x <= 1.3; x += 0.05)
+            r.worst = std::max(r.worst,
+                               std::abs(at(x, 0) - ExactBehindSquareOccluder(light, x, 0)) / lit);
         return r;
     };
     const Result traced = solve(false), inherited = solve(true);
