@@ -32,6 +32,7 @@
 #include "core/check.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "stream/flood_queue.h"
 
 #include <algorithm>
 #include <cmath>
@@ -228,18 +229,6 @@ public:
     }
 
 private:
-    struct Entry {
-        float cost;
-        uint32_t face, proxy;
-        bool operator>(const Entry& o) const {
-            if (cost != o.cost)
-                return cost > o.cost;
-            if (face != o.face)
-                return face > o.face;
-            return proxy > o.proxy;
-        }
-    };
-
     // Without the disc rule the first entry of a face to leave the heap takes it, so an
     // entry costlier than one already queued for the same face could never take it: it is
     // not pushed (same partition, fewer heap operations).
@@ -255,17 +244,17 @@ private:
                 if (cost < best_[g])  // a NaN orders nowhere: queued, never a bound
                     best_[g] = cost;
             }
-            heap_.push({cost, g, p});
+            heap_.push(cost, g, p);
         }
     }
 
     void Drain(const std::vector<Proxy>& proxies, std::vector<uint32_t>& chart) {
         while (!heap_.empty()) {
-            const Entry e = heap_.top();
+            const FloodQueue::Entry e = heap_.top();
             heap_.pop();
             if (!heap_.empty()) {  // the next face's data is on its way while this one is done
-                __builtin_prefetch(&s_.packed[heap_.top().face]);
-                __builtin_prefetch(&chart[heap_.top().face]);
+                __builtin_prefetch(&s_.packed[heap_.top_face()]);
+                __builtin_prefetch(&chart[heap_.top_face()]);
             }
             if (chart[e.face] != kNoIndex)
                 continue;
@@ -282,7 +271,7 @@ private:
     size_t leftovers_ = 0;
     bool discs_ = true;
     std::vector<float> best_;  // per face, the least cost queued (without the disc rule)
-    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
+    FloodQueue heap_;  // pops by (cost, face, proxy)
 };
 
 // Refits proxies to their regions, drops the empty ones (renumbering chart) and those under
