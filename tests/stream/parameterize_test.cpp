@@ -196,6 +196,79 @@ TEST(UvOverlapFraction, SharedEdgesAreNotOverlapsAndStackedTrianglesAre) {
     EXPECT_NEAR(UvOverlapFraction(stacked, uv, 512), 0.08 / 0.64, 0.01);
 }
 
+// The grid scan UvOverlapFraction replaced: every centre of each triangle's bounding box
+// tested with the three edge functions.
+double OverlapByEveryCentre(const std::vector<std::array<uint32_t, 3>>& triangles,
+                            const std::vector<Vec2f>& uv, uint32_t res) {
+    std::vector<uint8_t> hit(size_t(res) * res, 0);
+    const float r = float(res);
+    size_t covered = 0, twice = 0;
+    for (const auto& t : triangles) {
+        const Vec2f a = uv[t[0]], b = uv[t[1]], c = uv[t[2]];
+        const auto edge = [](Vec2f p, Vec2f q, float x, float y) {
+            return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+        };
+        const int i0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x}) * r - 0.5f)));
+        const int i1 = std::min(int(res) - 1, int(std::ceil(std::max({a.x, b.x, c.x}) * r - 0.5f)));
+        const int j0 = std::max(0, int(std::floor(std::min({a.y, b.y, c.y}) * r - 0.5f)));
+        const int j1 = std::min(int(res) - 1, int(std::ceil(std::max({a.y, b.y, c.y}) * r - 0.5f)));
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+                const float x = (float(i) + 0.5f) / r, y = (float(j) + 0.5f) / r;
+                const float w0 = edge(a, b, x, y), w1 = edge(b, c, x, y), w2 = edge(c, a, x, y);
+                if (!((w0 > 0 && w1 > 0 && w2 > 0) || (w0 < 0 && w1 < 0 && w2 < 0)))
+                    continue;
+                uint8_t& h = hit[size_t(j) * res + size_t(i)];
+                covered += h == 0;
+                twice += h == 1;
+                h = uint8_t(std::min(2, h + 1));
+            }
+    }
+    return covered ? double(twice) / double(covered) : 0;
+}
+
+// Row intervals instead of every centre: the same fraction, to the bit, on soups of both
+// orientations with corners on texel centres and on texel edges (edge functions exactly
+// 0), horizontal and vertical edges, slivers, degenerate and off-square triangles.
+TEST(UvOverlapFraction, RowIntervalsCountTheSameCentresAsTestingEveryOne) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> any(-0.1f, 1.1f), near(-0.03f, 0.03f);
+    for (const uint32_t res : {7u, 16u, 64u, 512u}) {
+        std::uniform_int_distribution<int> cell(0, int(res));
+        for (int soup = 0; soup < 200; ++soup) {
+            std::vector<Vec2f> uv;
+            std::vector<std::array<uint32_t, 3>> tris;
+            auto corner = [&](int kind) {
+                if (kind == 0)
+                    return Vec2f(any(rng), any(rng));
+                // On a texel centre (kind 1) or a texel edge (kind 2) of the grid.
+                const float o = kind == 1 ? 0.5f : 0.0f;
+                return Vec2f((float(cell(rng)) + o) / float(res), (float(cell(rng)) + o) / float(res));
+            };
+            for (int k = 0; k < 30; ++k) {
+                const uint32_t v = uint32_t(uv.size());
+                const int kind = int(rng() % 3);
+                const Vec2f a = corner(kind);
+                Vec2f b = corner(kind), c = corner(kind);
+                switch (rng() % 6) {
+                case 0: b.y = a.y; break;                         // a horizontal edge
+                case 1: c.x = a.x; break;                         // a vertical edge
+                case 2: b = a + Vec2f(near(rng), near(rng));      // small
+                        c = a + Vec2f(near(rng), near(rng)); break;
+                case 3: c = a + (b - a) * 0.37f; break;           // (nearly) collinear
+                case 4: c = a; break;                             // a repeated corner
+                default: break;
+                }
+                uv.insert(uv.end(), {a, b, c});
+                tris.push_back(rng() % 2 ? std::array<uint32_t, 3>{v, v + 1, v + 2}
+                                         : std::array<uint32_t, 3>{v, v + 2, v + 1});
+            }
+            ASSERT_EQ(UvOverlapFraction(tris, uv, res), OverlapByEveryCentre(tris, uv, res))
+                << "res " << res << " soup " << soup;
+        }
+    }
+}
+
 // A ramp winding one and a half turns around an axis, rising slowly: nearly isometric to a
 // flat annulus of 540 degrees, so its natural flattening has no flipped triangle but
 // covers a third of itself twice. It must not pass as a chart.
