@@ -269,15 +269,45 @@ void WriteBrick(const std::string& dir, uint32_t brick, const std::vector<BrickF
     file.Close();
 }
 
-TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
-                  std::vector<uint8_t>* on_cut) {
-    std::vector<BrickFace> faces = ReadBrick(dir, brick);
+namespace {
+
+// The vertex ids the faces use, ascending, each once. A brick that holds a whole scan uses
+// nearly every id of its span (0 .. V-1): one mark per id of the span then replaces the
+// sort of 3 ids per face (which ran on one core before the brick's segmentation).
+std::vector<uint64_t> UsedIds(const std::vector<BrickFace>& faces) {
     std::vector<uint64_t> ids;
+    if (faces.empty())
+        return ids;
+    uint64_t lo = faces[0].v[0], hi = lo;
+    for (const auto& f : faces)
+        for (uint64_t v : f.v) {
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+        }
+    if (hi - lo < 4 * 3 * uint64_t(faces.size())) {
+        std::vector<uint8_t> used(size_t(hi - lo) + 1, 0);
+        for (const auto& f : faces)
+            for (uint64_t v : f.v)
+                used[size_t(v - lo)] = 1;
+        for (size_t i = 0; i < used.size(); ++i)
+            if (used[i])
+                ids.push_back(lo + i);
+        return ids;
+    }
     ids.reserve(faces.size() * 3);
     for (const auto& f : faces)
         ids.insert(ids.end(), f.v, f.v + 3);
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    return ids;
+}
+
+}  // namespace
+
+TriMesh LoadBrick(const std::string& dir, uint32_t brick, size_t cache_bytes,
+                  std::vector<uint8_t>* on_cut) {
+    std::vector<BrickFace> faces = ReadBrick(dir, brick);
+    const std::vector<uint64_t> ids = UsedIds(faces);
 
     TriMesh m;
     m.vertex_id = ids;
