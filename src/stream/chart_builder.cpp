@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 namespace mebake::stream {
 
@@ -322,21 +323,31 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     // not its per-vertex cut flags (1 B per vertex of the whole mesh, 50 MB at 100M
     // triangles: the ingest's peak grew with the mesh; bench/RESULTS.md, issue 16 session 12).
     std::vector<uint8_t>().swap(out.repair.vertex_on_cut);
-    out.proxy_positions = mesh.position;
-    out.proxy_triangles.reserve(mesh.triangles.size() * 3);
-    for (const auto& t : mesh.triangles)
-        out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
-
-    // Normals over the whole repaired brick, so a vertex on a chart border has the same
-    // normal in every chart that holds it (per-chart normals made seams).
-    const BrickNormals brick_normals(mesh);
-
     clock.Lap(kRepair);
+
+    // The proxy's copy of the brick, normals over the whole repaired brick (so a vertex on
+    // a chart border has the same normal in every chart that holds it: per-chart normals
+    // made seams) and what the merge measures of its faces do not depend on the charts:
+    // they are made on another core while the segmentation, whose Lloyd floods run on
+    // one, goes on.
+    std::optional<BrickNormals> brick_normals;
+    MergeGeometry merge_geometry;
+    TaskGroup beside;
+    beside.Run([&] {
+        out.proxy_positions = mesh.position;
+        out.proxy_triangles.reserve(mesh.triangles.size() * 3);
+        for (const auto& t : mesh.triangles)
+            out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
+        brick_normals.emplace(mesh);
+    });
+    if (opt.merge_charts)
+        beside.Run([&] { merge_geometry = MeasureForMerge(mesh); });
     SegmentOptions sopt;
     sopt.max_chart_vertices = opt.max_chart_vertices;
     sopt.lloyd_iterations = opt.lloyd_iterations;
     SegmentReport sreport;
     std::vector<uint32_t> chart_of = SegmentCharts(mesh, sopt, &sreport);
+    beside.Wait();
     ParamOptions popt;
     popt.max_jacobian_deviation = opt.max_distortion;
     popt.refine_options.max_iterations = opt.refine_iterations;
@@ -366,7 +377,8 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             mopt.min_resolution = opt.min_resolution;
             mopt.max_resolution = opt.max_resolution;
         }
-        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united, &parts_scale);
+        mreport = MergeCharts(mesh, merge_geometry, mopt, &chart_of, &merged_params, &united,
+                              &parts_scale);
     }
 
     std::vector<Pending> roots;
@@ -393,7 +405,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
         LargestFirst(roots.size(), [&](size_t c) { return roots[c].chart.triangles.size(); });
     std::vector<RootResult> built(roots.size());
     ParallelForInOrder(order, [&](uint32_t c) {
-        built[c] = BuildFromRoot(dir, brick, c, std::move(roots[c]), brick_normals, popt, opt);
+        built[c] = BuildFromRoot(dir, brick, c, std::move(roots[c]), *brick_normals, popt, opt);
     });
     uint64_t split_for[4] = {};
     for (RootResult& r : built) {
