@@ -202,9 +202,12 @@ public:
     size_t leftovers() const { return leftovers_; }
 
     float Cost(uint32_t f, const Proxy& p) const {
+        return Cost(f, Vec3f(p.normal), Vec3f(p.center));
+    }
+    float Cost(uint32_t f, const Vec3f& normal, const Vec3f& center) const {
         const Surface::Packed& g = s_.packed[f];
-        const Vec3f dn = g.normal - Vec3f(p.normal);
-        const Vec3f dc = g.centroid - Vec3f(p.center);
+        const Vec3f dn = g.normal - normal;
+        const Vec3f dc = g.centroid - center;
         return Dot(dn, dn) + weight_ * Dot(dc, dc);
     }
 
@@ -234,10 +237,12 @@ private:
     // not pushed (same partition, fewer heap operations).
     void PushNeighbours(uint32_t f, uint32_t p, const Proxy& proxy,
                         const std::vector<uint32_t>& chart) {
+        // The proxy in float once, not per neighbour (the pushes may alias it for the compiler).
+        const Vec3f normal(proxy.normal), center(proxy.center);
         for (uint32_t g : s_.packed[f].grow) {
             if (g == kNoIndex || chart[g] != kNoIndex)
                 continue;
-            const float cost = Cost(g, proxy);
+            const float cost = Cost(g, normal, center);
             if (!discs_) {
                 if (cost > best_[g])
                     continue;
