@@ -325,13 +325,13 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
     std::vector<uint8_t>().swap(out.repair.vertex_on_cut);
     clock.Lap(kRepair);
 
-    // The proxy's copy of the brick, normals over the whole repaired brick (so a vertex on
-    // a chart border has the same normal in every chart that holds it: per-chart normals
-    // made seams) and what the merge measures of its faces do not depend on the charts:
-    // they are made on another core while the segmentation, whose Lloyd floods run on
-    // one, goes on.
+    // The proxy's copy of the brick, and normals over the whole repaired brick (so a vertex
+    // on a chart border has the same normal in every chart that holds it: per-chart
+    // normals made seams), do not depend on the charts: they are made on another core
+    // while the segmentation, whose Lloyd floods run on one, goes on. (The merge's face
+    // geometry made there too cost the ingest's peak +21 MB on igea for ~20 ms on the
+    // horse; it is measured after the segmentation, whose arrays are freed by then.)
     std::optional<BrickNormals> brick_normals;
-    MergeGeometry merge_geometry;
     TaskGroup beside;
     beside.Run([&] {
         out.proxy_positions = mesh.position;
@@ -340,8 +340,6 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             out.proxy_triangles.insert(out.proxy_triangles.end(), t.begin(), t.end());
         brick_normals.emplace(mesh);
     });
-    if (opt.merge_charts)
-        beside.Run([&] { merge_geometry = MeasureForMerge(mesh); });
     SegmentOptions sopt;
     sopt.max_chart_vertices = opt.max_chart_vertices;
     sopt.lloyd_iterations = opt.lloyd_iterations;
@@ -377,8 +375,7 @@ BrickResult BuildBrickCharts(const std::string& dir, uint32_t brick, const Chart
             mopt.min_resolution = opt.min_resolution;
             mopt.max_resolution = opt.max_resolution;
         }
-        mreport = MergeCharts(mesh, merge_geometry, mopt, &chart_of, &merged_params, &united,
-                              &parts_scale);
+        mreport = MergeCharts(mesh, mopt, &chart_of, &merged_params, &united, &parts_scale);
     }
 
     std::vector<Pending> roots;

@@ -37,8 +37,37 @@ struct Border {
     double score = 0;
 };
 
+struct Geometry {
+    std::vector<Vec3d> normal;  // per face, unit (raw: folds are read before any smoothing)
+    std::vector<double> area;
+    std::vector<uint32_t> twin;
+    std::vector<double> length;  // per half-edge: Borders reads it every round
+};
+
+Geometry Measure(const TriMesh& mesh) {
+    Geometry g;
+    const size_t nf = mesh.triangle_count();
+    g.normal.resize(nf);
+    g.area.resize(nf);
+    for (size_t f = 0; f < nf; ++f) {
+        const Tri& t = mesh.triangles[f];
+        const Vec3d a(mesh.position[t[0]]), b(mesh.position[t[1]]), c(mesh.position[t[2]]);
+        const Vec3d n = Cross(b - a, c - a);
+        g.area[f] = 0.5 * Length(n);
+        g.normal[f] = Normalize(n);
+    }
+    g.twin = BuildTwins(mesh.triangles, BuildEdgeGroups(mesh.triangles));
+    g.length.resize(3 * nf);
+    for (size_t h = 0; h < 3 * nf; ++h) {
+        const Tri& tri = mesh.triangles[h / 3];
+        g.length[h] =
+            Length(Vec3d(mesh.position[tri[(h + 1) % 3]]) - Vec3d(mesh.position[tri[h % 3]]));
+    }
+    return g;
+}
+
 // Every border between two charts, scored, best first (ties by ids).
-std::vector<Border> Borders(const MergeGeometry& g, const std::vector<uint32_t>& chart,
+std::vector<Border> Borders(const Geometry& g, const std::vector<uint32_t>& chart,
                             size_t chart_count, double fold_cos) {
     std::vector<Border> edges;
     std::vector<double> perimeter(chart_count, 0);
@@ -303,36 +332,7 @@ struct MergeState {
 
 }  // namespace
 
-MergeGeometry MeasureForMerge(const TriMesh& mesh) {
-    MergeGeometry g;
-    const size_t nf = mesh.triangle_count();
-    g.normal.resize(nf);
-    g.area.resize(nf);
-    for (size_t f = 0; f < nf; ++f) {
-        const Tri& t = mesh.triangles[f];
-        const Vec3d a(mesh.position[t[0]]), b(mesh.position[t[1]]), c(mesh.position[t[2]]);
-        const Vec3d n = Cross(b - a, c - a);
-        g.area[f] = 0.5 * Length(n);
-        g.normal[f] = Normalize(n);
-    }
-    g.twin = BuildTwins(mesh.triangles, BuildEdgeGroups(mesh.triangles));
-    g.length.resize(3 * nf);
-    for (size_t h = 0; h < 3 * nf; ++h) {
-        const Tri& tri = mesh.triangles[h / 3];
-        g.length[h] =
-            Length(Vec3d(mesh.position[tri[(h + 1) % 3]]) - Vec3d(mesh.position[tri[h % 3]]));
-    }
-    return g;
-}
-
 MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
-                        std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params,
-                        std::vector<uint8_t>* united, std::vector<double>* parts_scale) {
-    return MergeCharts(mesh, MeasureForMerge(mesh), options, chart_of, params, united,
-                       parts_scale);
-}
-
-MergeReport MergeCharts(const TriMesh& mesh, const MergeGeometry& g, const MergeOptions& options,
                         std::vector<uint32_t>* chart_of, std::vector<ChartParam>* params,
                         std::vector<uint8_t>* united, std::vector<double>* parts_scale) {
     std::vector<uint32_t>& chart = *chart_of;
@@ -350,7 +350,7 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeGeometry& g, const Merge
     report.charts_before = report.charts_after = chart_count;
     if (chart_count < 2)
         return report;
-    CHECK_EQ(g.area.size(), mesh.triangle_count());
+    const Geometry g = Measure(mesh);
     const double fold_cos = std::cos(options.fold_deg * kPi / 180);
     MergeState st{mesh, options, chart, {}, {}, {}, {}, {}, {}};
     st.faces_of.resize(chart_count);

@@ -81,22 +81,4 @@ MergeReport MergeCharts(const TriMesh& mesh, const MergeOptions& options,
                         std::vector<uint8_t>* united = nullptr,
                         std::vector<double>* parts_scale = nullptr);
 
-// What the merge reads of the mesh's faces every round: unit normals, areas, the twin of
-// each half-edge (kNoIndex at a border) and each half-edge's length. It does not depend on
-// the charts, so the chart builder measures it while the segmentation runs.
-struct MergeGeometry {
-    std::vector<Vec3d> normal;  // raw: folds are read before any smoothing
-    std::vector<double> area;
-    std::vector<uint32_t> twin;
-    std::vector<double> length;
-};
-MergeGeometry MeasureForMerge(const TriMesh& mesh);
-
-// MergeCharts with the mesh measured beforehand (MeasureForMerge(mesh)): the same result.
-MergeReport MergeCharts(const TriMesh& mesh, const MergeGeometry& geometry,
-                        const MergeOptions& options, std::vector<uint32_t>* chart_of,
-                        std::vector<ChartParam>* params = nullptr,
-                        std::vector<uint8_t>* united = nullptr,
-                        std::vector<double>* parts_scale = nullptr);
-
 }  // namespace mebake::stream
