@@ -237,9 +237,9 @@ TEST(PenumbraGrid, EdgeSlotsNameTheVertexPairs) {
                             ASSERT_LT(slot, grid.EdgeSlots());
                             ASSERT_LT(std::max(u, w), grid.vertices());
                             const std::pair<size_t, size_t> key{std::min(u, w), std::max(u, w)};
-                            const auto [p, new_slot] = pair_of.insert({slot, key});
+                            const auto p = pair_of.insert({slot, key}).first;
                             EXPECT_EQ(p->second, key) << "nt " << nt << " g " << g << " t " << t;
-                            const auto [k, new_key] = slot_of.insert({key, slot});
+                            const auto k = slot_of.insert({key, slot}).first;
                             EXPECT_EQ(k->second, slot) << "nt " << nt << " g " << g << " t " << t;
                             side = std::max({side, std::abs(c[2 * j] - c[2 * i]),
                                              std::abs(c[2 * j + 1] - c[2 * i + 1])});
