@@ -8,6 +8,7 @@
 // and do not count. Rays go only where a shadow edge crosses the light, and all points of a
 // level share one Embree batch. docs/method.md, "Direct light", says why.
 #include "solve/direct.h"
+#include "solve/penumbra_grid.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 
@@ -30,8 +31,10 @@ constexpr double kHorizonMargin = 0.06;
 enum : uint8_t { kUnknown = 0, kRequested = 1, kVisible = 2, kHidden = 3 };
 
 // The directed edges of one point's cells with their summed weights: an edge added the
-// other way round (a neighbour cell's) subtracts from the same entry. Open addressing on
-// the vertex pair; entries in the order first added (the sum's order, deterministic).
+// other way round (a neighbour cell's) subtracts from the same entry. One slot per edge of
+// the light's grid (PenumbraGrid::EdgeSlot; a hash of the vertex pair cost about half of
+// what the shared edges saved); entries in the order first added (the sum's order,
+// deterministic).
 class EdgeTable {
 public:
     struct Edge {
@@ -41,71 +44,79 @@ public:
     };
     std::vector<Edge> edges;
 
-    // Room for n edges at a load of at most 1/2.
-    void Reserve(size_t n) {
-        size_t size = 64;
-        while (size < 2 * n)
-            size *= 2;
-        if (key_.size() < size) {
-            key_.assign(size, kEmpty);
-            at_.resize(size);
-        }
-        edges.reserve(n);
+    // Room for the grid's slots, all empty.
+    void Reset(size_t slots) {
+        Clear();
+        if (at_.size() < slots)
+            at_.resize(slots, kEmpty);
     }
     void Clear() {
         for (const Edge& d : edges)
-            key_[d.slot] = kEmpty;
+            at_[d.slot] = kEmpty;
         edges.clear();
     }
-    void Add(uint32_t from, uint32_t to, float weight) {
-        const bool forward = from < to;
-        const uint64_t key = forward ? uint64_t(from) << 32 | to : uint64_t(to) << 32 | from;
-        const size_t mask = key_.size() - 1;
-        size_t i = size_t(key * 0x9E3779B97F4A7C15ull >> 40) & mask;
-        while (key_[i] != key && key_[i] != kEmpty)
-            i = (i + 1) & mask;
-        if (key_[i] == kEmpty) {
-            key_[i] = key;
-            at_[i] = uint32_t(edges.size());
-            edges.push_back({uint32_t(key >> 32), uint32_t(key), 0.0f, uint32_t(i)});
+    void Add(uint32_t slot, uint32_t from, uint32_t to, float weight) {
+        uint32_t& at = at_[slot];
+        if (at == kEmpty) {
+            at = uint32_t(edges.size());
+            edges.push_back({std::min(from, to), std::max(from, to), 0.0f, slot});
         }
-        edges[at_[i]].weight += forward ? weight : -weight;
+        edges[at].weight += from < to ? weight : -weight;
     }
 
 private:
-    static constexpr uint64_t kEmpty = ~uint64_t(0);
-    std::vector<uint64_t> key_;  // per slot: from << 32 | to
-    std::vector<uint32_t> at_;   // per slot: its entry in edges
+    static constexpr uint32_t kEmpty = ~uint32_t(0);
+    std::vector<uint32_t> at_;  // per slot: its entry in edges
+};
+
+// A cell: a triangle of grid vertices (a[k], b[k]) in fan triangle t, for point q, with
+// their vertex indices (PenumbraGrid::VertexIndex; every level asks for them again).
+struct Cell {
+    uint32_t q;  // penumbra point
+    uint16_t t;  // fan triangle
+    uint8_t a[3], b[3];
+    uint32_t v[3];
+};
+
+// What a pass allocates, kept per thread across passes (a pass runs per light and node: its
+// ~20 vectors' malloc and free were ~1.5 % of the bunny's solve). Every field is reset or
+// overwritten before use, so a pass computes the same whatever ran before it.
+struct PenumbraScratch {
+    std::vector<uint8_t> state, height, cut, aligned;
+    std::vector<double> sign;
+    std::vector<Vec3d> clip;
+    std::vector<Cell> visible, cur, next, finest;
+    std::vector<float> part;
+    std::vector<uint32_t> traced, first, fill;
+    std::vector<std::pair<const Cell*, float>> cells;
+    std::vector<std::pair<uint32_t, uint32_t>> asked;  // (point, vertex)
+    EdgeTable edges;
+    SegmentBatch batch;
 };
 
 }  // namespace
 
 class DirectLight::PenumbraPass {
 public:
-    // A cell: a triangle of grid vertices (a[k], b[k]) in fan triangle t, for point q.
-    struct Cell {
-        uint32_t q;  // penumbra point
-        uint16_t t;  // fan triangle
-        uint8_t a[3], b[3];
-    };
-
     PenumbraPass(const DirectLight& dl, const Light& l, std::span<const ReceiverPoint> points,
-                 std::span<const size_t> penumbra)
+                 std::span<const size_t> penumbra, PenumbraScratch* scratch)
         : dl_(dl),
           l_(l),
           points_(points),
           penumbra_(penumbra),
+          grid_{l.grid, l.vertices.size() - 2},
           g_(l.grid),
-          nt_(l.vertices.size() - 2),
-          per_t_(size_t(g_ + 1) * size_t(g_ + 1)),
-          nv_(nt_ * per_t_),
-          state_(penumbra.size() * nv_, kUnknown),
-          height_(penumbra.size() * nv_, kHeightUnknown) {
+          nt_(grid_.nt),
+          nv_(grid_.vertices()),
+          s_(*scratch) {
+        s_.state.assign(penumbra.size() * nv_, kUnknown);
+        s_.height.assign(penumbra.size() * nv_, kHeightUnknown);
         PrepareHorizons();
-        clip_.resize(6 * std::max<size_t>(3, l.vertices.size()));
+        s_.clip.resize(6 * std::max<size_t>(3, l.vertices.size()));
+        s_.visible.clear();
         // Room for twice the coarse level's cells (4 per fan triangle and point): the uniform
         // cells' list regrowing cost ~1 % of the bunny's solve in malloc and free.
-        visible_.reserve(penumbra.size() * nt_ * 8);
+        s_.visible.reserve(penumbra.size() * nt_ * 8);
     }
 
     // Vertex states from an earlier pass over the same points (or none), and the light's
@@ -115,17 +126,17 @@ public:
         const size_t nk = l_.classify.size();
         classified_ = classified;
         centre_ = centre_traced && l_.centre_t >= 0
-                      ? VertexIndex(size_t(l_.centre_t), l_.centre_a, l_.centre_b)
+                      ? grid_.VertexIndex(size_t(l_.centre_t), l_.centre_a, l_.centre_b)
                       : nv_;
         for (size_t q = 0; q < penumbra_.size(); ++q) {
-            uint8_t* st = &state_[q * nv_];
+            uint8_t* st = &s_.state[q * nv_];
             if (prior)
                 std::copy(prior, prior + nv_, st);
             const uint8_t* cls = &classified[q * nk];
             for (size_t t = 0; t < nt_; ++t) {
-                st[VertexIndex(t, 0, 0)] = cls[0] ? kHidden : kVisible;
-                st[VertexIndex(t, g_, 0)] = cls[t + 1] ? kHidden : kVisible;
-                st[VertexIndex(t, 0, g_)] = cls[t + 2] ? kHidden : kVisible;
+                st[grid_.VertexIndex(t, 0, 0)] = cls[0] ? kHidden : kVisible;
+                st[grid_.VertexIndex(t, g_, 0)] = cls[t + 1] ? kHidden : kVisible;
+                st[grid_.VertexIndex(t, 0, g_)] = cls[t + 2] ? kHidden : kVisible;
             }
         }
     }
@@ -134,94 +145,95 @@ public:
     // each finest mixed cell's times its visible part (FinestParts), summed over the cells'
     // edges (Sum).
     void Run(std::vector<Vec3d>* e) {
-        const std::vector<Cell> finest = RefineCells();
-        Sum(finest, FinestParts(finest), e);
+        RefineCells();
+        FinestParts();
+        Sum(e);
     }
 
     // The vertex states, requests forgotten (for the probe cache).
-    std::vector<uint8_t> TakeStates() {
-        for (auto& st : state_)
+    void TakeStates(std::vector<uint8_t>* states) {
+        for (auto& st : s_.state)
             st = st == kRequested ? uint8_t(kUnknown) : st;
-        return std::move(state_);
+        states->swap(s_.state);
     }
 
 private:
-    // Fan triangles t and t+1 share the edge v0 v[t+2]: its vertices (a, 0) in t+1 are
-    // (0, a) in t (the same point, computed the same way), so they are traced once.
-    size_t VertexIndex(size_t t, int a, int b) const {
-        if (b == 0 && t > 0)
-            return (t - 1) * per_t_ + size_t(a) * size_t(g_ + 1);
-        return t * per_t_ + size_t(b) * size_t(g_ + 1) + size_t(a);
+    Cell MakeCell(uint32_t q, size_t t, const uint8_t a[3], const uint8_t b[3]) const {
+        Cell c{q, uint16_t(t), {a[0], a[1], a[2]}, {b[0], b[1], b[2]}, {}};
+        for (int k = 0; k < 3; ++k)
+            c.v[k] = uint32_t(grid_.VertexIndex(t, a[k], b[k]));
+        return c;
     }
-    size_t CornerIndex(const Cell& c, int k) const { return VertexIndex(c.t, c.a[k], c.b[k]); }
 
     // Per point: the sign that turns the Lambert sum into E (all cells lie in the light's
     // plane with its winding), and whether the horizon or the face plane cuts the light.
     void PrepareHorizons() {
-        sign_.resize(penumbra_.size());
-        cut_.resize(penumbra_.size());
+        s_.sign.resize(penumbra_.size());
+        s_.cut.resize(penumbra_.size());
         for (size_t q = 0; q < penumbra_.size(); ++q) {
             const ReceiverPoint& rp = points_[penumbra_[q]];
             const Vec3d x(rp.position), h(rp.horizon), f(rp.face);
             const double side = Dot(x - l_.vertices[0], l_.normal);
-            sign_[q] = side > 0 ? -0.5 : l_.two_sided && side < 0 ? 0.5 : 0.0;
-            cut_[q] = 0;
+            s_.sign[q] = side > 0 ? -0.5 : l_.two_sided && side < 0 ? 0.5 : 0.0;
+            s_.cut[q] = 0;
             for (const auto& v : l_.vertices)
-                cut_[q] |= Dot(v - x, h) < 0 || Dot(v - x, f) < 0;
+                s_.cut[q] |= Dot(v - x, h) < 0 || Dot(v - x, f) < 0;
         }
     }
 
-    // The coarse level: each fan triangle of each point as 2 x 2 cells (or the grid's own).
-    std::vector<Cell> InitialCells() const {
-        std::vector<Cell> cells;
+    // The coarse level into `cells`: each fan triangle of each point as 2 x 2 cells (or the
+    // grid's own), but those wholly below the point's horizon.
+    void InitialCells(std::vector<Cell>* cells) const {
+        cells->clear();
         const int start = std::min(g_, 2), s = g_ / start;
         for (uint32_t q = 0; q < penumbra_.size(); ++q) {
             for (size_t t = 0; t < nt_; ++t) {
                 for (int b = 0; b < g_; b += s) {
                     for (int a = 0; a + b < g_; a += s) {
-                        cells.push_back({q,
-                                         uint16_t(t),
-                                         {uint8_t(a), uint8_t(a + s), uint8_t(a)},
-                                         {uint8_t(b), uint8_t(b), uint8_t(b + s)}});
-                        if (a + b + 2 * s <= g_)
-                            cells.push_back({q,
-                                             uint16_t(t),
-                                             {uint8_t(a + s), uint8_t(a + s), uint8_t(a)},
-                                             {uint8_t(b), uint8_t(b + s), uint8_t(b + s)}});
+                        const uint8_t ua[3] = {uint8_t(a), uint8_t(a + s), uint8_t(a)};
+                        const uint8_t ub[3] = {uint8_t(b), uint8_t(b), uint8_t(b + s)};
+                        cells->push_back(MakeCell(q, t, ua, ub));
+                        if (Below(cells->back()))
+                            cells->pop_back();
+                        if (a + b + 2 * s <= g_) {
+                            const uint8_t da[3] = {uint8_t(a + s), uint8_t(a + s), uint8_t(a)};
+                            const uint8_t db[3] = {uint8_t(b), uint8_t(b + s), uint8_t(b + s)};
+                            cells->push_back(MakeCell(q, t, da, db));
+                            if (Below(cells->back()))
+                                cells->pop_back();
+                        }
                     }
                 }
             }
         }
-        return cells;
     }
 
     // The cell's E if it were wholly visible, above the point's horizon and face plane.
     Vec3d ClosedForm(const Cell& c) const {
-        const Vec3d tri[3] = {l_.grid_pos[CornerIndex(c, 0)], l_.grid_pos[CornerIndex(c, 1)],
-                              l_.grid_pos[CornerIndex(c, 2)]};
+        const Vec3d tri[3] = {l_.grid_pos[c.v[0]], l_.grid_pos[c.v[1]], l_.grid_pos[c.v[2]]};
         return AbovePlanes(tri, 3, c.q);
     }
 
     // E at point q of the polygon v[0..nv) where it is above the point's horizon and face
-    // plane (clipped only where the light crosses them, cut_).
+    // plane (clipped only where the light crosses them, cut).
     Vec3d AbovePlanes(const Vec3d* v, int nv, uint32_t q) const {
         const ReceiverPoint& rp = points_[penumbra_[q]];
         const Vec3d x(rp.position);
-        if (!cut_[q])
-            return LambertSum(v, nv, x) * sign_[q];
-        // Each clip at most doubles the vertex count: 2 nv, then 4 nv (clip_ holds 6 x the
+        if (!s_.cut[q])
+            return LambertSum(v, nv, x) * s_.sign[q];
+        // Each clip at most doubles the vertex count: 2 nv, then 4 nv (clip holds 6 x the
         // light's or a triangle's count).
-        Vec3d* poly = clip_.data();
-        Vec3d* both = clip_.data() + 2 * nv;
+        Vec3d* poly = s_.clip.data();
+        Vec3d* both = s_.clip.data() + 2 * nv;
         const int n = ClipToHalfSpace(v, nv, x, Vec3d(rp.horizon), poly);
         if (n < 3)
             return Vec3d{};
         if (Dot(rp.face, rp.face) == 0)
-            return LambertSum(poly, n, x) * sign_[q];
+            return LambertSum(poly, n, x) * s_.sign[q];
         const int m = ClipToHalfSpace(poly, n, x, Vec3d(rp.face), both);
         if (m < 3)
             return Vec3d{};
-        return LambertSum(both, m, x) * sign_[q];
+        return LambertSum(both, m, x) * s_.sign[q];
     }
 
     Vec3f Origin(uint32_t q) const {
@@ -246,32 +258,34 @@ private:
     // asks again for the corners its cells share): kWellBelow, kJustBelow or kAboveHorizon.
     enum : uint8_t { kHeightUnknown = 0, kWellBelow, kJustBelow, kAboveHorizon };
     uint8_t HeightClass(uint32_t q, size_t v) const {
-        uint8_t& h = height_[q * nv_ + v];
+        uint8_t& h = s_.height[q * nv_ + v];
         if (h == kHeightUnknown) {
             const double x = Height(q, v);
             h = x >= 0 ? kAboveHorizon : x >= -kHorizonMargin ? kJustBelow : kWellBelow;
         }
         return h;
     }
-    bool Above(uint32_t q, size_t v) const { return !cut_[q] || HeightClass(q, v) != kWellBelow; }
+    bool Above(uint32_t q, size_t v) const {
+        return !s_.cut[q] || HeightClass(q, v) != kWellBelow;
+    }
     // Above both planes, as ClipToHalfSpace decides it: a cell with all three corners so is
     // not clipped.
     bool Unclipped(uint32_t q, size_t v) const { return HeightClass(q, v) == kAboveHorizon; }
     bool Below(const Cell& c) const {
-        if (!cut_[c.q])
+        if (!s_.cut[c.q])
             return false;
         for (int k = 0; k < 3; ++k)
-            if (HeightClass(c.q, CornerIndex(c, k)) == kAboveHorizon)
+            if (HeightClass(c.q, c.v[k]) == kAboveHorizon)
                 return false;
         return true;
     }
 
     // A cell's corners not well below the horizon: how many are visible and hidden.
     void Corners(const Cell& c, int* visible, int* hidden) const {
-        const uint8_t* st = &state_[c.q * nv_];
+        const uint8_t* st = &s_.state[c.q * nv_];
         *visible = *hidden = 0;
         for (int k = 0; k < 3; ++k) {
-            const size_t v = CornerIndex(c, k);
+            const size_t v = c.v[k];
             if (!Above(c.q, v))
                 continue;
             *visible += st[v] == kVisible;
@@ -283,13 +297,14 @@ private:
     // light's centre (centre_) was a classification ray's end already: the same segment,
     // so its answer is taken (one ray fewer per penumbra point, the same states).
     void TraceCorners(const std::vector<Cell>& cells) {
-        batch_.Clear();
-        asked_.clear();
+        SegmentBatch& batch = s_.batch;
+        batch.Clear();
+        s_.asked.clear();
         const size_t nk = l_.classify.size();
         for (const Cell& c : cells) {
             for (int k = 0; k < 3; ++k) {
-                const size_t v = CornerIndex(c, k);
-                uint8_t& st = state_[c.q * nv_ + v];
+                const size_t v = c.v[k];
+                uint8_t& st = s_.state[c.q * nv_ + v];
                 if (st != kUnknown || !Above(c.q, v))
                     continue;
                 if (v == centre_) {
@@ -297,25 +312,25 @@ private:
                     continue;
                 }
                 st = kRequested;
-                asked_.push_back({c.q, uint32_t(v)});
-                batch_.AddSegment(Origin(c.q), l_.grid_target[v]);
+                s_.asked.push_back({c.q, uint32_t(v)});
+                batch.AddSegment(Origin(c.q), l_.grid_target[v]);
             }
         }
-        batch_.Trace(dl_.vis_, RayKind::kPenumbra);
-        for (size_t r = 0; r < asked_.size(); ++r)
-            state_[asked_[r].first * nv_ + asked_[r].second] =
-                batch_.occluded[r] ? kHidden : kVisible;
+        batch.Trace(dl_.vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < s_.asked.size(); ++r)
+            s_.state[s_.asked[r].first * nv_ + s_.asked[r].second] =
+                batch.occluded[r] ? kHidden : kVisible;
     }
 
-    // Level by level: visible uniform cells go to visible_ (hidden ones and those wholly
-    // below the horizon add nothing), mixed cells are split in four down to the finest grid.
-    // Returns the finest mixed cells.
-    std::vector<Cell> RefineCells() {
-        std::vector<Cell> cur = InitialCells(), next, finest;
+    // Level by level: visible uniform cells go to visible (hidden ones and those wholly
+    // below the horizon add nothing), mixed cells are split in four down to the finest grid,
+    // the finest mixed cells go to finest.
+    void RefineCells() {
+        std::vector<Cell>& cur = s_.cur;
+        std::vector<Cell>& next = s_.next;
+        s_.finest.clear();
+        InitialCells(&cur);
         while (!cur.empty()) {
-            cur.erase(
-                std::remove_if(cur.begin(), cur.end(), [&](const Cell& c) { return Below(c); }),
-                cur.end());
             TraceCorners(cur);
             next.clear();
             for (const Cell& c : cur) {
@@ -323,17 +338,16 @@ private:
                 Corners(c, &visible, &hidden);
                 if (visible == 0 || hidden == 0) {
                     if (hidden == 0)
-                        visible_.push_back(c);
+                        s_.visible.push_back(c);
                     continue;
                 }
                 if (Side(c) <= 1)
-                    finest.push_back(c);
+                    s_.finest.push_back(c);
                 else
                     Split(c, &next);
             }
             std::swap(cur, next);
         }
-        return finest;
     }
 
     static int Side(const Cell& c) {
@@ -344,16 +358,24 @@ private:
         return side;
     }
 
-    // Midpoints of the edges 01, 12, 20; the four children.
-    static void Split(const Cell& c, std::vector<Cell>* out) {
+    // Midpoints of the edges 01, 12, 20; the four children (but those wholly below the
+    // point's horizon).
+    void Split(const Cell& c, std::vector<Cell>* out) const {
         const uint8_t ma[3] = {uint8_t((c.a[0] + c.a[1]) / 2), uint8_t((c.a[1] + c.a[2]) / 2),
                                uint8_t((c.a[2] + c.a[0]) / 2)};
         const uint8_t mb[3] = {uint8_t((c.b[0] + c.b[1]) / 2), uint8_t((c.b[1] + c.b[2]) / 2),
                                uint8_t((c.b[2] + c.b[0]) / 2)};
-        out->push_back({c.q, c.t, {c.a[0], ma[0], ma[2]}, {c.b[0], mb[0], mb[2]}});
-        out->push_back({c.q, c.t, {ma[0], c.a[1], ma[1]}, {mb[0], c.b[1], mb[1]}});
-        out->push_back({c.q, c.t, {ma[2], ma[1], c.a[2]}, {mb[2], mb[1], c.b[2]}});
-        out->push_back({c.q, c.t, {ma[0], ma[1], ma[2]}, {mb[0], mb[1], mb[2]}});
+        uint32_t mv[3];
+        for (int k = 0; k < 3; ++k)
+            mv[k] = uint32_t(grid_.VertexIndex(c.t, ma[k], mb[k]));
+        const Cell children[4] = {
+            {c.q, c.t, {c.a[0], ma[0], ma[2]}, {c.b[0], mb[0], mb[2]}, {c.v[0], mv[0], mv[2]}},
+            {c.q, c.t, {ma[0], c.a[1], ma[1]}, {mb[0], c.b[1], mb[1]}, {mv[0], c.v[1], mv[1]}},
+            {c.q, c.t, {ma[2], ma[1], c.a[2]}, {mb[2], mb[1], c.b[2]}, {mv[2], mv[1], c.v[2]}},
+            {c.q, c.t, {ma[0], ma[1], ma[2]}, {mb[0], mb[1], mb[2]}, {mv[0], mv[1], mv[2]}}};
+        for (const Cell& child : children)
+            if (!Below(child))
+                out->push_back(child);
     }
 
     // The cell in canonical form: up (a,b) (a+1,b) (a,b+1) or down (a+1,b) (a+1,b+1) (a,b+1).
@@ -364,13 +386,13 @@ private:
     }
 
     // Points where four or more mixed finest cells of one fan triangle lie in one row of a
-    // cell family: a shadow edge runs along that row.
-    std::vector<uint8_t> AlignedPoints(const std::vector<Cell>& finest) const {
+    // cell family: a shadow edge runs along that row (into s_.aligned, per point).
+    void AlignedPoints() {
         struct Span {
             int lo[3] = {1 << 20, 1 << 20, 1 << 20}, hi[3] = {-1, -1, -1}, count = 0;
         };
         std::vector<Span> spans(penumbra_.size() * nt_);  // per point and fan triangle
-        for (const Cell& c : finest) {
+        for (const Cell& c : s_.finest) {
             int a0, b0;
             bool down;
             Canonical(c, &a0, &b0, &down);
@@ -380,13 +402,12 @@ private:
                 sp.lo[f] = std::min(sp.lo[f], row[f]), sp.hi[f] = std::max(sp.hi[f], row[f]);
             ++sp.count;
         }
-        std::vector<uint8_t> aligned(spans.size() / std::max<size_t>(nt_, 1), 0);
+        s_.aligned.assign(spans.size() / std::max<size_t>(nt_, 1), 0);
         for (size_t k = 0; k < spans.size(); ++k) {
             const Span& sp = spans[k];
-            aligned[k / nt_] |= sp.count >= 4 && (sp.hi[0] == sp.lo[0] || sp.hi[1] == sp.lo[1] ||
-                                                  sp.hi[2] == sp.lo[2]);
+            s_.aligned[k / nt_] |= sp.count >= 4 && (sp.hi[0] == sp.lo[0] ||
+                                                     sp.hi[1] == sp.lo[1] || sp.hi[2] == sp.lo[2]);
         }
-        return aligned;
     }
 
     // Finest cells that a shadow edge crosses count as partly visible without a ray: with one
@@ -396,26 +417,29 @@ private:
     // 1/4 - 1/9). An edge parallel to a family of cell rows crosses them all at the same
     // offset, which biases that by up to half a row: at such points each mixed cell gets one
     // ray to a fixed point of an R2 low-discrepancy sequence indexed by the cell (part 0 or 1).
-    std::vector<float> FinestParts(const std::vector<Cell>& finest) {
-        const std::vector<uint8_t> aligned = AlignedPoints(finest);
-        std::vector<float> part(finest.size());
-        batch_.Clear();
-        std::vector<uint32_t> traced;
+    // Into s_.part, per finest cell.
+    void FinestParts() {
+        AlignedPoints();
+        const std::vector<Cell>& finest = s_.finest;
+        std::vector<float>& part = s_.part;
+        part.assign(finest.size(), 0.0f);
+        SegmentBatch& batch = s_.batch;
+        batch.Clear();
+        s_.traced.clear();
         for (uint32_t k = 0; k < finest.size(); ++k) {
             const Cell& c = finest[k];
-            if (!aligned[c.q]) {
+            if (!s_.aligned[c.q]) {
                 int visible, hidden;
                 Corners(c, &visible, &hidden);
                 part[k] = visible + hidden == 2 ? 0.5f : visible == 1 ? 0.25f : 0.75f;
                 continue;
             }
-            batch_.AddSegment(Origin(c.q), SamplePoint(c));
-            traced.push_back(k);
+            batch.AddSegment(Origin(c.q), SamplePoint(c));
+            s_.traced.push_back(k);
         }
-        batch_.Trace(dl_.vis_, RayKind::kPenumbra);
-        for (size_t r = 0; r < traced.size(); ++r)
-            part[traced[r]] = batch_.occluded[r] ? 0.0f : 1.0f;
-        return part;
+        batch.Trace(dl_.vis_, RayKind::kPenumbra);
+        for (size_t r = 0; r < s_.traced.size(); ++r)
+            part[s_.traced[r]] = batch.occluded[r] ? 0.0f : 1.0f;
     }
 
     // E = sum_cells w_c L(c), w = 1 for a visible cell and the part for a finest mixed one.
@@ -425,50 +449,55 @@ private:
     // same sum up to rounding; on the bunny 26.1M terms for the unclipped cells' 54.7M
     // edges). A cell that the point's horizon or face plane cuts is clipped and summed on
     // its own (ClosedForm).
-    void Sum(const std::vector<Cell>& finest, const std::vector<float>& part,
-             std::vector<Vec3d>* e) {
+    void Sum(std::vector<Vec3d>* e) {
+        const std::vector<Cell>& visible = s_.visible;
+        const std::vector<Cell>& finest = s_.finest;
         // The cells of each point, together: counting sort by point.
-        std::vector<uint32_t> first(penumbra_.size() + 1, 0);
-        for (const Cell& c : visible_)
+        std::vector<uint32_t>& first = s_.first;
+        first.assign(penumbra_.size() + 1, 0);
+        for (const Cell& c : visible)
             ++first[c.q + 1];
         for (const Cell& c : finest)
             ++first[c.q + 1];
-        uint32_t most = 0;
-        for (size_t q = 0; q < penumbra_.size(); ++q) {
-            most = std::max(most, first[q + 1]);
+        for (size_t q = 0; q < penumbra_.size(); ++q)
             first[q + 1] += first[q];
-        }
-        std::vector<std::pair<const Cell*, float>> cells(first.back());
-        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-        for (const Cell& c : visible_)
+        auto& cells = s_.cells;
+        cells.resize(first.back());
+        std::vector<uint32_t>& fill = s_.fill;
+        fill.assign(first.begin(), first.end() - 1);
+        for (const Cell& c : visible)
             cells[fill[c.q]++] = {&c, 1.0f};
         for (size_t k = 0; k < finest.size(); ++k)
-            cells[fill[finest[k].q]++] = {&finest[k], part[k]};
-        edges_.Reserve(3 * size_t(most));
+            cells[fill[finest[k].q]++] = {&finest[k], s_.part[k]};
+        EdgeTable& edges = s_.edges;
+        edges.Reset(grid_.EdgeSlots());
         for (uint32_t q = 0; q < penumbra_.size(); ++q) {
-            edges_.Clear();
+            edges.Clear();
             Vec3d clipped;
             for (uint32_t k = first[q]; k < first[q + 1]; ++k) {
                 const Cell& c = *cells[k].first;
                 const float w = cells[k].second;
                 if (w == 0)
                     continue;
-                const uint32_t v[3] = {uint32_t(CornerIndex(c, 0)), uint32_t(CornerIndex(c, 1)),
-                                       uint32_t(CornerIndex(c, 2))};
-                if (cut_[q] && !(Unclipped(q, v[0]) && Unclipped(q, v[1]) && Unclipped(q, v[2]))) {
+                if (s_.cut[q] &&
+                    !(Unclipped(q, c.v[0]) && Unclipped(q, c.v[1]) && Unclipped(q, c.v[2]))) {
                     clipped += ClosedForm(c) * double(w);
                     continue;
                 }
-                for (int j = 0; j < 3; ++j)
-                    edges_.Add(v[j], v[j == 2 ? 0 : j + 1], w);
+                for (int j = 0; j < 3; ++j) {
+                    const int i = j == 2 ? 0 : j + 1;
+                    edges.Add(grid_.EdgeSlot(c.t, c.a[j], c.b[j], c.a[i], c.b[i]), c.v[j],
+                              c.v[i], w);
+                }
             }
             const Vec3d x(points_[penumbra_[q]].position);
             Vec3d sum;
-            for (const EdgeTable::Edge& d : edges_.edges)
+            for (const EdgeTable::Edge& d : edges.edges)
                 if (d.weight != 0)
                     sum += LambertEdge(l_.grid_pos[d.from], l_.grid_pos[d.to], x) * double(d.weight);
-            (*e)[q] += sum * sign_[q] + clipped;
+            (*e)[q] += sum * s_.sign[q] + clipped;
         }
+        edges.Clear();
     }
 
     // The cell's fixed low-discrepancy point (R2 sequence indexed by the cell).
@@ -482,11 +511,11 @@ private:
         double b = std::fmod(0.5 + 0.5698402909980532 * double(id + 1), 1.0);
         if (a + b > 1)
             a = 1 - a, b = 1 - b;
-        const Vec3d& p0 =
-            l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0) : VertexIndex(c.t, a0, b0)];
-        const Vec3d& p1 =
-            l_.grid_pos[down ? VertexIndex(c.t, a0 + 1, b0 + 1) : VertexIndex(c.t, a0 + 1, b0)];
-        const Vec3d& p2 = l_.grid_pos[VertexIndex(c.t, a0, b0 + 1)];
+        const Vec3d& p0 = l_.grid_pos[down ? grid_.VertexIndex(c.t, a0 + 1, b0)
+                                           : grid_.VertexIndex(c.t, a0, b0)];
+        const Vec3d& p1 = l_.grid_pos[down ? grid_.VertexIndex(c.t, a0 + 1, b0 + 1)
+                                           : grid_.VertexIndex(c.t, a0 + 1, b0)];
+        const Vec3d& p2 = l_.grid_pos[grid_.VertexIndex(c.t, a0, b0 + 1)];
         return Vec3f(p0 + (p1 - p0) * a + (p2 - p0) * b);
     }
 
@@ -494,21 +523,14 @@ private:
     const Light& l_;
     std::span<const ReceiverPoint> points_;
     std::span<const size_t> penumbra_;
+    const PenumbraGrid grid_;
     const int g_;
-    const size_t nt_, per_t_, nv_;
-    std::vector<uint8_t> state_;
+    const size_t nt_, nv_;
+    // Every buffer of the pass (state, height per point and grid vertex; the cells; the
+    // batches), the calling thread's.
+    PenumbraScratch& s_;
     std::span<const uint8_t> classified_;  // per point: occluded[] of its classify rays
     size_t centre_ = 0;                    // the centre's grid vertex (nv_: none reused)
-    std::vector<double> sign_;
-    std::vector<uint8_t> cut_;
-    mutable std::vector<uint8_t> height_;  // HeightClass per point and grid vertex
-    // AbovePlanes' clipped polygons, kept here: arrays of Vec3d on ClosedForm's stack were
-    // zeroed on every call (rep stos, a seventh of RefineCells' own time on the bunny).
-    mutable std::vector<Vec3d> clip_;
-    std::vector<Cell> visible_;            // visible uniform cells
-    EdgeTable edges_;                      // Sum's edges of one point
-    SegmentBatch batch_;
-    std::vector<std::pair<uint32_t, uint32_t>> asked_;  // (point, vertex)
 };
 
 void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points,
@@ -518,11 +540,12 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     e->assign(penumbra.size(), Vec3d{});
     if (penumbra.empty())
         return;
-    PenumbraPass pass(*this, l, points, penumbra);
+    static thread_local PenumbraScratch scratch;
+    PenumbraPass pass(*this, l, points, penumbra, &scratch);
     pass.SeedStates(classified, centre_traced, prior);
     pass.Run(e);
     if (states)
-        *states = pass.TakeStates();
+        pass.TakeStates(states);
 }
 
 }  // namespace mebake::solve

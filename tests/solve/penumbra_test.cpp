@@ -4,14 +4,18 @@
 // cells are counted 1/4 or 3/4 visible without rays (direct.cpp); the edge parallel to the
 // grid is solver_test's square occluder.
 #include "solve/direct.h"
+#include "solve/penumbra_grid.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/visibility.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <utility>
 
 namespace mebake::solve {
 namespace {
@@ -195,6 +199,72 @@ TEST(Penumbra, LightCentreTakesItsClassificationRay) {
     const double lit = IrradianceClipped(light.vertices, 1.0, Vec3d(0, 0, 0), Vec3d(0, 1, 0));
     EXPECT_LT(e[1], lit);
     EXPECT_GT(e[1], 0.97 * lit);
+}
+
+// Every cell the penumbra's refinement can make (the coarse level's and all their
+// descendants, penumbra.cpp): two cell edges share an edge slot exactly when their ends
+// have the same two vertex indices, on lights of 3 to 7 vertices (the shared diagonals
+// between fan triangles, v0's own index in fan triangles 2 and up) and grids of 1 to 32.
+TEST(PenumbraGrid, EdgeSlotsNameTheVertexPairs) {
+    for (size_t nt = 1; nt <= 5; ++nt) {
+        for (int g = 1; g <= 32; g *= 2) {
+            const PenumbraGrid grid{g, nt};
+            std::map<uint32_t, std::pair<size_t, size_t>> pair_of;
+            std::map<std::pair<size_t, size_t>, uint32_t> slot_of;
+            size_t cells = 0;
+            using Cell = std::array<int, 6>;  // a0 b0 a1 b1 a2 b2
+            for (size_t t = 0; t < nt; ++t) {
+                std::vector<Cell> cur;
+                const int s = g / std::min(g, 2);
+                for (int b = 0; b < g; b += s) {
+                    for (int a = 0; a + b < g; a += s) {
+                        cur.push_back({a, b, a + s, b, a, b + s});
+                        if (a + b + 2 * s <= g)
+                            cur.push_back({a + s, b, a + s, b + s, a, b + s});
+                    }
+                }
+                while (!cur.empty()) {
+                    std::vector<Cell> next;
+                    for (const Cell& c : cur) {
+                        ++cells;
+                        int side = 0;
+                        for (int j = 0; j < 3; ++j) {
+                            const int i = (j + 1) % 3;
+                            const size_t u = grid.VertexIndex(t, c[2 * j], c[2 * j + 1]);
+                            const size_t w = grid.VertexIndex(t, c[2 * i], c[2 * i + 1]);
+                            const uint32_t slot =
+                                grid.EdgeSlot(t, c[2 * j], c[2 * j + 1], c[2 * i], c[2 * i + 1]);
+                            ASSERT_LT(slot, grid.EdgeSlots());
+                            ASSERT_LT(std::max(u, w), grid.vertices());
+                            const std::pair<size_t, size_t> key{std::min(u, w), std::max(u, w)};
+                            const auto p = pair_of.insert({slot, key}).first;
+                            EXPECT_EQ(p->second, key) << "nt " << nt << " g " << g << " t " << t;
+                            const auto k = slot_of.insert({key, slot}).first;
+                            EXPECT_EQ(k->second, slot) << "nt " << nt << " g " << g << " t " << t;
+                            side = std::max({side, std::abs(c[2 * j] - c[2 * i]),
+                                             std::abs(c[2 * j + 1] - c[2 * i + 1])});
+                        }
+                        if (side <= 1)
+                            continue;
+                        int m[6];
+                        for (int j = 0; j < 3; ++j) {
+                            const int i = (j + 1) % 3;
+                            m[2 * j] = (c[2 * j] + c[2 * i]) / 2;
+                            m[2 * j + 1] = (c[2 * j + 1] + c[2 * i + 1]) / 2;
+                        }
+                        next.push_back({c[0], c[1], m[0], m[1], m[4], m[5]});
+                        next.push_back({m[0], m[1], c[2], c[3], m[2], m[3]});
+                        next.push_back({m[4], m[5], m[2], m[3], c[4], c[5]});
+                        next.push_back({m[0], m[1], m[2], m[3], m[4], m[5]});
+                    }
+                    cur.swap(next);
+                }
+            }
+            // Each level's cells: g^2 at the finest, a third more above it.
+            EXPECT_GE(cells, size_t(g) * size_t(g) * nt);
+            EXPECT_EQ(pair_of.size(), slot_of.size());
+        }
+    }
 }
 
 }  // namespace
