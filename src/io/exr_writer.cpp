@@ -161,6 +161,11 @@ struct ExrWriter::Impl {
     std::vector<size_t> order;         // pixel-major channel index, in the file's order
     std::vector<float> pending;        // rows not yet making a whole chunk
     int pending_rows = 0;
+    struct Chunk {  // one chunk's buffers, kept for the next call (no page faults per band)
+        std::vector<char> raw;
+        std::vector<unsigned char> tmp, packed;
+    };
+    std::vector<Chunk> chunk_buffers;
 
     void WriteChunks(const float* pixels, int lines);
 
@@ -252,11 +257,9 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
 void ExrWriter::Impl::WriteChunks(const float* pixels, int lines) {
     const int chunks = (lines + kZipLines - 1) / kZipLines;
     const size_t row_floats = size_t(width) * channels.size();
-    struct Chunk {
-        std::vector<char> raw;
-        std::vector<unsigned char> tmp, packed;
-    };
-    std::vector<Chunk> out(static_cast<size_t>(chunks));
+    if (chunk_buffers.size() < size_t(chunks))
+        chunk_buffers.resize(size_t(chunks));
+    std::vector<Chunk>& out = chunk_buffers;
     const bool half = options.type == ExrPixelType::Half;
     ParallelFor(0, chunks, [&](int64_t c) {
         const int first = int(c) * kZipLines, n = std::min(kZipLines, lines - first);
