@@ -1,5 +1,6 @@
 // OpenEXR scanline output through a seekable file descriptor we own (so the temporary +
-// rename discipline of every mebake output applies), and a small reader for tests.
+// rename discipline of every mebake output applies), and a small reader for tests. ZIP
+// files (the default) have their chunks compressed here, in parallel, as OpenEXR would.
 #include "io/exr_writer.h"
 
 #include "core/check.h"
@@ -16,6 +17,7 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -79,6 +81,8 @@ Imf::Compression ToImf(ExrCompression c) {
 
 // OpenEXR's ZIP_COMPRESSION holds 16 scanlines per chunk.
 constexpr int kZipLines = 16;
+static_assert(std::endian::native == std::endian::little,
+              "ZIP chunks are laid out from memory as EXR's little-endian values");
 
 void CheckedValue(float v, Imath::half* out) {
     CHECK(std::isfinite(v));
@@ -334,8 +338,7 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     const size_t elem = half ? sizeof(Imath::half) : sizeof(float);
     char* data;
     if (half) {
-        // In parallel: the ZIP stream after it is one thread's (a light map band's
-        // conversion was a sixth of its EXR time, bench/RESULTS.md "Issue 13 (session 20)").
+        // In parallel (PIZ or no compression: ZIP chunks convert in their own tasks).
         m.half_scratch.resize(pixels.size());
         ParallelForRange(
             0, int64_t(pixels.size()),
