@@ -1,5 +1,6 @@
 // OpenEXR scanline output through a seekable file descriptor we own (so the temporary +
-// rename discipline of every mebake output applies), and a small reader for tests.
+// rename discipline of every mebake output applies), and a small reader for tests. ZIP
+// files (the default) have their chunks compressed here, in parallel, as OpenEXR would.
 #include "io/exr_writer.h"
 
 #include "core/check.h"
@@ -16,6 +17,7 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -25,6 +27,7 @@
 #include <set>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 namespace mebake::io {
 
@@ -76,6 +79,67 @@ Imf::Compression ToImf(ExrCompression c) {
     return Imf::ZIP_COMPRESSION;
 }
 
+// OpenEXR's ZIP_COMPRESSION holds 16 scanlines per chunk.
+constexpr int kZipLines = 16;
+static_assert(std::endian::native == std::endian::little,
+              "ZIP chunks are laid out from memory as EXR's little-endian values");
+
+void CheckedValue(float v, Imath::half* out) {
+    CHECK(std::isfinite(v));
+    *out = Imath::half(std::clamp(v, -kHalfMax, kHalfMax));
+}
+void CheckedValue(float v, float* out) {
+    CHECK(std::isfinite(v));
+    *out = v;
+}
+
+// One chunk's scanlines as OpenEXR stores them before compression: line by line, each
+// channel's values in a run, channels in name order; little-endian halves or floats (as
+// x86's memory is). `order` lists pixel-major channel indices in the file's name order.
+template <class T>
+void LayOutLines(const float* pixels, int width, int lines, std::span<const size_t> order,
+                 std::vector<char>& raw) {
+    const size_t nc = order.size(), w = size_t(width);
+    raw.resize(size_t(lines) * nc * w * sizeof(T));
+    T* out = reinterpret_cast<T*>(raw.data());
+    for (int y = 0; y < lines; ++y) {
+        const float* row = pixels + size_t(y) * w * nc;
+        for (size_t k : order)
+            for (size_t x = 0; x < w; ++x)
+                CheckedValue(row[x * nc + k], out++);
+    }
+}
+
+// Compresses a chunk exactly as OpenEXR 3's Zip class does (ImfZip.cpp): the bytes split
+// into even and odd halves, each byte replaced by its difference from the one before
+// (+128), then zlib's compress2 at the file's level. `packed` gets what the chunk stores:
+// the compressed bytes, or `raw` itself when compressing does not make it smaller (as
+// OpenEXR's line buffers fall back to). False when zlib fails.
+bool ZipChunk(const std::vector<char>& raw, int level, std::vector<unsigned char>& tmp,
+              std::vector<unsigned char>& packed) {
+    const size_t n = raw.size();
+    tmp.resize(n);
+    size_t even = 0, odd = (n + 1) / 2;
+    for (size_t i = 0; i < n; ++i)
+        tmp[(i & 1) ? odd++ : even++] = static_cast<unsigned char>(raw[i]);
+    for (size_t i = n; i-- > 1;)
+        tmp[i] = static_cast<unsigned char>(int(tmp[i]) - int(tmp[i - 1]) + (128 + 256));
+    uLongf size = compressBound(uLong(n));
+    packed.resize(size);
+    if (compress2(packed.data(), &size, tmp.data(), uLong(n), level) != Z_OK)
+        return false;
+    if (size < n)
+        packed.resize(size);
+    else
+        packed.assign(raw.begin(), raw.end());
+    return true;
+}
+
+void PutLe(std::vector<unsigned char>& out, uint64_t v, int bytes) {
+    for (int i = 0; i < bytes; ++i)
+        out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+}
+
 }  // namespace
 
 struct ExrWriter::Impl {
@@ -86,11 +150,28 @@ struct ExrWriter::Impl {
     std::vector<std::string> channels;
     ExrOptions options;
     std::unique_ptr<FdOStream> stream;
-    std::unique_ptr<Imf::OutputFile> file;
+    std::unique_ptr<Imf::OutputFile> file;  // null when the chunks are written here
     std::vector<float> scratch;
     std::vector<Imath::half> half_scratch;
     int rows = 0;
     bool committed = false;
+
+    // ZIP: OpenEXR writes the header and an empty offset table, then the chunks are
+    // compressed here in parallel (OpenEXR's writePixels compresses on the calling thread
+    // without its own pool) and written in order; Commit() fills the table.
+    int zip_level = 0;
+    uint64_t table_at = 0;             // file offset of the chunk offset table
+    std::vector<uint64_t> offsets;     // of the chunks written
+    std::vector<size_t> order;         // pixel-major channel index, in the file's order
+    std::vector<float> pending;        // rows not yet making a whole chunk
+    int pending_rows = 0;
+    struct Chunk {  // one chunk's buffers, kept for the next call (no page faults per band)
+        std::vector<char> raw;
+        std::vector<unsigned char> tmp, packed;
+    };
+    std::vector<Chunk> chunk_buffers;
+
+    void WriteChunks(const float* pixels, int lines);
 
     ~Impl() {
         file.reset();  // writes the offset table (errors ignored: we are giving up)
@@ -157,12 +238,60 @@ ExrWriter::ExrWriter(std::string path, int width, int height, std::vector<std::s
     } catch (const std::exception& e) {
         IoError({m.path}, "cannot start the EXR file: {}", e.what());
     }
+    if (options.compression == ExrCompression::Zip) {
+        // OpenEXR has written the magic number, the header and a zero offset table (one
+        // entry per chunk) and leaves the stream after them; closing it now only writes
+        // that table again.
+        const uint64_t chunks = uint64_t((height + kZipLines - 1) / kZipLines);
+        const uint64_t end = m.stream->tellp();
+        CHECK_GT(end, 8 * chunks);
+        m.table_at = end - 8 * chunks;
+        m.zip_level = h.zipCompressionLevel();
+        m.file.reset();
+        if (!m.stream->error.empty())
+            IoError({m.path}, "write failed: {}", m.stream->error);
+        m.stream->seekp(end);
+        for (auto it = h.channels().begin(); it != h.channels().end(); ++it)
+            m.order.push_back(size_t(
+                std::find(m.channels.begin(), m.channels.end(), it.name()) - m.channels.begin()));
+        CHECK_EQ(m.order.size(), m.channels.size());
+    }
+}
+
+void ExrWriter::Impl::WriteChunks(const float* pixels, int lines) {
+    const int chunks = (lines + kZipLines - 1) / kZipLines;
+    const size_t row_floats = size_t(width) * channels.size();
+    if (chunk_buffers.size() < size_t(chunks))
+        chunk_buffers.resize(size_t(chunks));
+    std::vector<Chunk>& out = chunk_buffers;
+    const bool half = options.type == ExrPixelType::Half;
+    ParallelFor(0, chunks, [&](int64_t c) {
+        const int first = int(c) * kZipLines, n = std::min(kZipLines, lines - first);
+        const float* at = pixels + size_t(first) * row_floats;
+        Chunk& k = out[size_t(c)];
+        if (half)
+            LayOutLines<Imath::half>(at, width, n, order, k.raw);
+        else
+            LayOutLines<float>(at, width, n, order, k.raw);
+        if (!ZipChunk(k.raw, zip_level, k.tmp, k.packed))
+            IoError({path}, "EXR chunk compression (zlib) failed");
+    });
+    std::vector<unsigned char> head;
+    for (int c = 0; c < chunks; ++c) {
+        const std::vector<unsigned char>& data = out[size_t(c)].packed;
+        offsets.push_back(stream->tellp());
+        head.clear();
+        PutLe(head, uint64_t(uint32_t(rows + c * kZipLines)), 4);  // first line, int32
+        PutLe(head, data.size(), 4);                               // bytes, int32
+        stream->write(reinterpret_cast<const char*>(head.data()), int(head.size()));
+        stream->write(reinterpret_cast<const char*>(data.data()), int(data.size()));
+    }
 }
 
 ExrWriter::~ExrWriter() = default;
 
 int ExrWriter::rows_written() const {
-    return impl_->rows;
+    return impl_->rows + impl_->pending_rows;
 }
 const std::string& ExrWriter::path() const {
     return impl_->path;
@@ -170,20 +299,46 @@ const std::string& ExrWriter::path() const {
 
 void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
     Impl& m = *impl_;
-    CHECK(m.file);
+    CHECK(!m.committed);
     CHECK_GE(rows, 0);
-    CHECK_LE(m.rows + rows, m.height);
+    CHECK_LE(m.rows + m.pending_rows + rows, m.height);
     const size_t nc = m.channels.size();
     CHECK_EQ(pixels.size(), size_t(rows) * size_t(m.width) * nc);
     if (rows == 0)
         return;
+    if (!m.file) {
+        // Whole chunks go out now, from the caller's rows where no earlier rows wait;
+        // the rest waits for the next call (or Commit(), the last chunk's short end).
+        const size_t row_floats = size_t(m.width) * nc;
+        if (m.pending_rows > 0) {
+            const int take = std::min(rows, kZipLines - m.pending_rows);
+            m.pending.insert(m.pending.end(), pixels.begin(),
+                             pixels.begin() + ptrdiff_t(size_t(take) * row_floats));
+            m.pending_rows += take;
+            pixels = pixels.subspan(size_t(take) * row_floats);
+            rows -= take;
+            if (m.pending_rows < kZipLines)
+                return;
+            m.WriteChunks(m.pending.data(), kZipLines);
+            m.rows += kZipLines;
+            m.pending.clear();
+            m.pending_rows = 0;
+        }
+        const int whole = rows / kZipLines * kZipLines;
+        if (whole > 0) {
+            m.WriteChunks(pixels.data(), whole);
+            m.rows += whole;
+        }
+        m.pending.assign(pixels.begin() + ptrdiff_t(size_t(whole) * row_floats), pixels.end());
+        m.pending_rows = rows - whole;
+        return;
+    }
     // OpenEXR does not convert between a slice's type and the file's when writing.
     const bool half = m.options.type == ExrPixelType::Half;
     const size_t elem = half ? sizeof(Imath::half) : sizeof(float);
     char* data;
     if (half) {
-        // In parallel: the ZIP stream after it is one thread's (a light map band's
-        // conversion was a sixth of its EXR time, bench/RESULTS.md "Issue 13 (session 20)").
+        // In parallel (PIZ or no compression: ZIP chunks convert in their own tasks).
         m.half_scratch.resize(pixels.size());
         ParallelForRange(
             0, int64_t(pixels.size()),
@@ -221,9 +376,23 @@ void ExrWriter::WriteRows(std::span<const float> pixels, int rows) {
 
 void ExrWriter::Commit() {
     Impl& m = *impl_;
-    CHECK(m.file);
-    CHECK_EQ(m.rows, m.height);
-    m.file.reset();
+    CHECK(!m.committed);
+    if (m.file) {
+        CHECK_EQ(m.rows, m.height);
+        m.file.reset();
+    } else {
+        if (m.pending_rows > 0) {
+            m.WriteChunks(m.pending.data(), m.pending_rows);
+            m.rows += m.pending_rows;
+            m.pending_rows = 0;
+        }
+        CHECK_EQ(m.rows, m.height);
+        std::vector<unsigned char> table;
+        for (uint64_t at : m.offsets)
+            PutLe(table, at, 8);
+        m.stream->seekp(m.table_at);
+        m.stream->write(reinterpret_cast<const char*>(table.data()), int(table.size()));
+    }
     if (!m.stream->error.empty())
         IoError({m.path}, "write failed: {}", m.stream->error);
     if (m.to_stream) {

@@ -180,6 +180,17 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
     return p;
 }
 
+std::optional<ShadingPoint> ChartShader::AtUvInside(Vec2f u) const {
+    u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
+    const stream::GridLocation loc = tile_.grid.Locate(u);
+    if (loc.triangle == stream::kNoTriangle || !loc.real)
+        return std::nullopt;
+    ShadingPoint p =
+        AtTriangle(loc.triangle, loc.barycentric[0], loc.barycentric[1], loc.barycentric[2]);
+    p.uv = u;
+    return p;
+}
+
 ShadingPoint ChartShader::AtVertex(uint32_t v) const {
     ShadingPoint p;
     p.uv = tile_.uv[v];

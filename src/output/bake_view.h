@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -133,6 +134,9 @@ public:
     ShadingPoint AtTriangle(uint32_t t, float b0, float b1, float b2) const;
     // Chart point u (clamped to the unit square), located in the chart's grid.
     ShadingPoint AtUv(Vec2f u) const;
+    // AtUv(u) when u lies in a triangle of the chart (ChartGrid::InsideTriangle's test,
+    // the same location), nullopt in the virtual part: one search for both.
+    std::optional<ShadingPoint> AtUvInside(Vec2f u) const;
     // Tile vertex v: its own uv, normal and colour; the material of the lowest-index
     // triangle that uses it (the default material if none does).
     ShadingPoint AtVertex(uint32_t v) const;

@@ -16,6 +16,30 @@ ContinuousField::ContinuousField(const solve::ChartField& field, double max_delt
     delta_ = std::min(0.5 * smallest, max_delta);
 }
 
+size_t ContinuousField::CentreLeaf(double u, double v, double* s, double* t) const {
+    // The last leaf this thread found in this field: a texel's neighbour in its row mostly
+    // lies in it. LeafAt picks the leaf whose square holds (u, v), right and top edges
+    // excluded but on the chart's border (leaves partition the square), and its halving
+    // steps are exact, so a leaf that holds the point is LeafAt's answer and
+    // (u 2^level - i, v 2^level - j) its exact (s, t). Checked in full, so a stale entry
+    // (another field at the same address) is only a miss.
+    thread_local const solve::ChartField* last_field = nullptr;
+    thread_local size_t last_leaf = 0;
+    if (last_field == &field_ && last_leaf < field_.node_count()) {
+        const solve::QuadNode& q = field_.node(last_leaf);
+        const double hi_u = q.U(1), hi_v = q.V(1);
+        if (q.leaf() && q.U(0) <= u && (u < hi_u || hi_u == 1) && q.V(0) <= v &&
+            (v < hi_v || hi_v == 1)) {
+            *s = std::clamp(u / q.size() - double(q.i), 0.0, 1.0);
+            *t = std::clamp(v / q.size() - double(q.j), 0.0, 1.0);
+            return last_leaf;
+        }
+    }
+    last_field = &field_;
+    last_leaf = field_.LeafAt(u, v, s, t);
+    return last_leaf;
+}
+
 void ContinuousField::Eval(double u, double v, float* out) const {
     u = std::clamp(u, 0.0, 1.0);
     v = std::clamp(v, 0.0, 1.0);
@@ -28,7 +52,7 @@ void ContinuousField::Eval(double u, double v, float* out) const {
     // corners (i, j) / 2^level are exact doubles.
     {
         double s, t;
-        const size_t n = field_.LeafAt(u, v, &s, &t);
+        const size_t n = CentreLeaf(u, v, &s, &t);
         const solve::QuadNode& q = field_.node(n);
         const double hi_u = q.U(1), hi_v = q.V(1);
         if (q.U(0) <= u0 && (u1 < hi_u || hi_u == 1) && q.V(0) <= v0 && (v1 < hi_v || hi_v == 1)) {

@@ -27,6 +27,10 @@ public:
     double delta() const { return delta_; }
 
 private:
+    // field_.LeafAt(u, v, s, t) for (u, v) in the unit square, the same leaf and (s, t),
+    // from the last leaf this thread found when it still holds the point.
+    size_t CentreLeaf(double u, double v, double* s, double* t) const;
+
     const solve::ChartField& field_;
     double delta_ = 0;
 };

@@ -3,6 +3,7 @@
 #include "core/error.h"
 
 #include <algorithm>
+#include <optional>
 
 namespace mebake::output {
 
@@ -21,15 +22,16 @@ struct ChartResult {
 
 // Samples along an edge from (u0, v0) in direction (du, dv) of length len; `across` is the
 // unit offset to the other side.
-void SampleEdge(const ChartShader& shader, const stream::ChartTile& tile, float u0, float v0,
-                float du, float dv, Vec2f across, int samples, ChartResult* out) {
+void SampleEdge(const ChartShader& shader, float u0, float v0, float du, float dv, Vec2f across,
+                int samples, ChartResult* out) {
     bool any = false;
     for (int k = 0; k < samples; ++k) {
         const float t = (float(k) + 0.5f) / float(samples);
         const Vec2f p(u0 + du * t, v0 + dv * t);
-        if (tile.grid.InsideTriangle(p) == stream::kNoTriangle)
+        std::optional<ShadingPoint> inside = shader.AtUvInside(p);
+        if (!inside)
             continue;  // the virtual part is never displayed
-        ShadingPoint sp = shader.AtUv(p);
+        ShadingPoint& sp = *inside;
         sp.uv = p - across * kSide;
         const float y1 = Luminance(shader.Radiosity(sp));
         sp.uv = p + across * kSide;
@@ -51,9 +53,9 @@ ChartResult SampleChart(const BakeView& view, uint32_t c, const stream::ChartTil
             continue;
         const float s = float(n.size()), u = float(n.U(1)), v = float(n.V(1));
         if (u < 1)  // right edge
-            SampleEdge(shader, tile, u, float(n.V(0)), 0, s, Vec2f(1, 0), samples, &r);
+            SampleEdge(shader, u, float(n.V(0)), 0, s, Vec2f(1, 0), samples, &r);
         if (v < 1)  // top edge
-            SampleEdge(shader, tile, float(n.U(0)), v, s, 0, Vec2f(0, 1), samples, &r);
+            SampleEdge(shader, float(n.U(0)), v, s, 0, Vec2f(0, 1), samples, &r);
     }
     return r;
 }

@@ -204,19 +204,20 @@ int SolveChannel(SeamRows& a, const std::vector<double>& diag, std::vector<doubl
     const size_t n = x.size();
     std::vector<double> r(n), p(n), q(n);
     ApplyNormal(a, x, q);
-    double bnorm = 0, rz = 0;
+    // rr = |r|^2 is summed in the loop that makes r, beside rz: each sum is one chain of
+    // dependent additions (in index order, so the same doubles), and two chains in one
+    // loop overlap where two loops wait on each in turn.
+    double bnorm = 0, rz = 0, rr = 0;
     for (size_t i = 0; i < n; ++i) {
         r[i] = x[i] - q[i];
         p[i] = r[i] / diag[i];
         rz += r[i] * p[i];
         bnorm += x[i] * x[i];
+        rr += r[i] * r[i];
     }
     const double stop = kTolerance * kTolerance * std::max(bnorm, 1e-300);
     int it = 0;
     for (; it < kMaxIterations; ++it) {
-        double rr = 0;
-        for (size_t i = 0; i < n; ++i)
-            rr += r[i] * r[i];
         if (rr <= stop)
             break;
         ApplyNormal(a, p, q);
@@ -227,10 +228,12 @@ int SolveChannel(SeamRows& a, const std::vector<double>& diag, std::vector<doubl
             break;
         const double alpha = rz / pq;
         double rz_next = 0;
+        rr = 0;
         for (size_t i = 0; i < n; ++i) {
             x[i] += alpha * p[i];
             r[i] -= alpha * q[i];
             rz_next += r[i] * (r[i] / diag[i]);
+            rr += r[i] * r[i];
         }
         const double beta = rz_next / rz;
         rz = rz_next;

@@ -2,7 +2,9 @@
 // in its centre's leaf) gives the bits of the definition it replaced: the leaves at the
 // box's four corners, the centre's own fit when they are one leaf, else the blend. Points
 // on node borders, a box half-width either side of them and a few ulps off, at 0 and 1,
-// and at random, on an uneven tree whose leaves all have their own fit.
+// and at random, on an uneven tree whose leaves all have their own fit. The points run along
+// rows, so most reuse the thread's last leaf (CentreLeaf); the second test mixes fields and
+// orders so the last leaf is stale, another field's or a neighbour's.
 #include "output/continuous_field.h"
 
 #include "solve/basis.h"
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <utility>
 #include <vector>
 
 namespace mebake::output {
@@ -99,6 +102,45 @@ TEST(ContinuousField, OneDescentGivesTheFiveDescentsBits) {
         }
     EXPECT_GT(one_leaf, 1000);  // both kinds of point were met
     EXPECT_GT(blended, 1000);
+}
+
+TEST(ContinuousField, TheLastLeafGivesLeafAtsBitsInAnyOrder) {
+    solve::ChartField f(2, 3), g(1, 3);
+    size_t n = 0;
+    for (int level = 0; level < 5; ++level)
+        n = size_t(f.Subdivide(n)) + (level % 2 ? 3 : 0);
+    g.Subdivide(0);
+    g.Subdivide(2);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> coeff(0.5f, 2.f);
+    for (solve::ChartField* h : {&f, &g})
+        for (size_t k = 0; k < h->node_count(); ++k)
+            for (int c = 0; c < h->stride(); ++c)
+                h->value(k)[c] = coeff(rng);
+    const ContinuousField a(f, 1.0 / 1024), b(g, 1.0 / 1024);
+    std::vector<std::pair<double, double>> at;
+    std::uniform_real_distribution<double> any(0, 1);
+    for (int k = 0; k < 4000; ++k)
+        at.push_back({any(rng), any(rng)});
+    for (size_t k = 0; k < f.node_count(); ++k)  // node corners and an ulp either side
+        for (double du : {-1.0, 0.0, 1.0})
+            at.push_back({std::clamp(std::nextafter(f.node(k).U(1), 2.0 * du), 0.0, 1.0),
+                          std::clamp(f.node(k).V(0), 0.0, 1.0)});
+    for (int pass = 0; pass < 2; ++pass) {
+        for (size_t k = 0; k < at.size(); ++k) {
+            const auto [u, v] = at[k];
+            float got[3], want[3], other[3], other_want[3];
+            a.Eval(u, v, got);
+            Reference(f, a.delta(), u, v, want);
+            ASSERT_EQ(std::memcmp(got, want, sizeof got), 0) << u << " " << v;
+            if (k % 3 == 0) {  // another field between: the next point's last leaf is stale
+                b.Eval(v, u, other);
+                Reference(g, b.delta(), v, u, other_want);
+                ASSERT_EQ(std::memcmp(other, other_want, sizeof other), 0) << v << " " << u;
+            }
+        }
+        std::reverse(at.begin(), at.end());
+    }
 }
 
 }  // namespace

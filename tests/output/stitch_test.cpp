@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -652,6 +653,36 @@ TEST_F(StitchTest, VertexCopiesAgree) {
     }
     EXPECT_EQ(shared, (o.kx - 1) * (o.ky * o.m + 1) + (o.ky - 1) * (o.kx * o.m + 1) -
                           (o.kx - 1) * (o.ky - 1));
+}
+
+// AtUvInside (node_seams.cpp's one search per sample) is InsideTriangle's test and AtUv's
+// point: inside the triangles, on their borders, in the inset's virtual margin and outside
+// the unit square (clamped).
+TEST_F(StitchTest, AtUvInsideIsInsideTriangleAndAtUv) {
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;
+    WriteGridBake(dir_, o);
+    const BakeView view = OpenBakeView(dir_);
+    LoadShaders(view);
+    int inside = 0, outside = 0;
+    for (uint32_t c = 0; c < tiles_.size(); ++c)
+        for (int j = 0; j <= 40; ++j)
+            for (int i = 0; i <= 40; ++i) {
+                const Vec2f u(-0.02f + 1.04f * float(i) / 40, -0.02f + 1.04f * float(j) / 40);
+                const bool want = tiles_[c].grid.InsideTriangle(u) != stream::kNoTriangle;
+                const std::optional<ShadingPoint> got = shaders_[c]->AtUvInside(u);
+                ASSERT_EQ(got.has_value(), want) << "chart " << c << " at " << u.x << ", " << u.y;
+                (want ? inside : outside)++;
+                if (!got)
+                    continue;
+                const ShadingPoint at = shaders_[c]->AtUv(u);
+                EXPECT_EQ(got->uv, at.uv);
+                EXPECT_EQ(got->normal, at.normal);
+                EXPECT_EQ(got->albedo, at.albedo);
+                EXPECT_EQ(got->material, at.material);
+            }
+    EXPECT_GT(inside, 0);
+    EXPECT_GT(outside, 0);
 }
 
 TEST_F(StitchTest, RenderShowsNoStepAtBorders) {
