@@ -18,20 +18,10 @@ double AngleBetween(const Vec3f& a, const Vec3f& b) {
 }
 
 // The largest cosine between a direction within `spread` of `dir` and a normal of `cone`.
-// Where acos's bracket (below) already puts the gap past 0 or pi / 2 by 1e-6 rad (far
-// more than the rounding of acos and of the subtractions), the answer is exactly 1 or 0
-// without acos and cos (acos and cos were 3.8 % of the horse's bounce pass, mostly here).
 double MaxCosine(const Vec3f& dir, double spread, const NormalCone& cone) {
     if (cone.angle >= kHalfPi)
         return 1;
-    const double x = std::clamp(double(Dot(dir, cone.axis)), -1.0, 1.0);
-    const double reach = double(cone.angle) + spread;
-    // acos x = 2 asin y, y = sqrt((1 - x) / 2), and y <= asin y <= y / sqrt(1 - y^2).
-    if (std::sqrt(2 * (1 - x)) > reach + kHalfPi + 1e-6)
-        return 0;
-    if (x > 0 && 2 * std::sqrt((1 - x) / (1 + x)) < reach - 1e-6)
-        return 1;
-    const double gap = std::acos(x) - cone.angle - spread;
+    const double gap = AngleBetween(dir, cone.axis) - cone.angle - spread;
     return gap <= 0 ? 1 : gap >= kHalfPi ? 0 : std::cos(gap);
 }
 
@@ -87,13 +77,8 @@ double ConeLinkBound(double db_max, double power, const LinkSide& r, const LinkS
     double band = 1;
     const float cones = r.cone.angle + e.cone.angle;
     if (r.cone.angle < kHalfPi && e.cone.angle < kHalfPi && cones < 1.1f) {
-        // Axes more than acos(0.4999) = pi / 3 + 1.15e-4 apart make psi past pi / 3 and
-        // band 1 (2 (1 - cos psi) >= 1.0002) whatever the cones: no acos or cos needed.
-        const double c = std::clamp(double(Dot(r.cone.axis, e.cone.axis)), -1.0, 1.0);
-        if (c >= 0.4999) {
-            const double psi = cones + std::acos(c);
-            band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
-        }
+        const double psi = cones + AngleBetween(r.cone.axis, e.cone.axis);
+        band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
     }
     const Vec3f d = e.center - r.center;
     const double dist = Length(d), gap = dist - r.radius - e.radius;
@@ -101,10 +86,8 @@ double ConeLinkBound(double db_max, double power, const LinkSide& r, const LinkS
         return db_max * band;
     const Vec3f u = d / float(dist);
     const double alpha = std::asin(std::min(1.0, (double(r.radius) + e.radius) / dist));
-    // A receiver side facing wholly away makes far 0 whatever the emitter's cosine.
-    const double at_r = MaxCosine(u, alpha, r.cone);
-    const double at_e = at_r > 0 ? MaxCosine(-u, alpha, e.cone) : 1;
-    const double far = power / (std::numbers::pi * gap * gap) * at_r * at_e;
+    const double far = power / (std::numbers::pi * gap * gap) * MaxCosine(u, alpha, r.cone) *
+                       MaxCosine(-u, alpha, e.cone);
     return std::min(db_max * band, far);
 }
 

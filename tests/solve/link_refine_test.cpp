@@ -12,7 +12,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -132,76 +131,6 @@ TEST(LinkRefine, ConeShortcutsGiveThePlainFormulasBits) {
         else
             EXPECT_LE(ConeLinkBound(2, 3, a, b), 2 * band) << "k " << k;
     }
-}
-
-// ConeLinkBound as written before its shortcuts (the axes' band, acos's bracket in
-// MaxCosine, the emitter's cosine skipped behind a receiver facing away): the reference.
-double PlainConeLinkBound(double db_max, double power, const LinkSide& r, const LinkSide& e) {
-    constexpr double kHalf = std::numbers::pi / 2;
-    auto angle = [](const Vec3f& a, const Vec3f& b) {
-        return std::acos(std::clamp(double(Dot(a, b)), -1.0, 1.0));
-    };
-    auto max_cos = [&](const Vec3f& dir, double spread, const NormalCone& cone) {
-        if (cone.angle >= kHalf)
-            return 1.0;
-        const double gap = angle(dir, cone.axis) - cone.angle - spread;
-        return gap <= 0 ? 1 : gap >= kHalf ? 0 : std::cos(gap);
-    };
-    double band = 1;
-    const float cones = r.cone.angle + e.cone.angle;
-    if (r.cone.angle < kHalf && e.cone.angle < kHalf && cones < 1.1f) {
-        const double psi = cones + angle(r.cone.axis, e.cone.axis);
-        band = std::min(1.0, 2 * (1 - std::cos(std::min(psi, std::numbers::pi))));
-    }
-    const Vec3f d = e.center - r.center;
-    const double dist = Length(d), gap = dist - r.radius - e.radius;
-    if (gap <= 0)
-        return db_max * band;
-    const Vec3f u = d / float(dist);
-    const double alpha = std::asin(std::min(1.0, (double(r.radius) + e.radius) / dist));
-    const double far = power / (std::numbers::pi * gap * gap) * max_cos(u, alpha, r.cone) *
-                       max_cos(-u, alpha, e.cone);
-    return std::min(db_max * band, far);
-}
-
-// The shortcuts settle only what the plain formulas settle with room to spare: the same
-// bits on random links of every kind, many of them on the cases each shortcut takes and
-// some within a hair of their edges (the cones' reach close to the direction's angle).
-TEST(LinkRefine, ConeLinkBoundShortcutsGiveThePlainBits) {
-    Rng rnd;
-    int apart_axes = 0, facing_away = 0, within = 0;
-    for (int k = 0; k < 200000; ++k) {
-        const Vec3f ar(rnd.Dir());
-        const Vec3f ae(rnd.Tilt(Vec3d(ar), k % 3 == 0 ? 0.3 : 3.2));
-        const float tr = float(k % 5 == 0 ? 1.7 * rnd() : 0.6 * rnd());
-        const float te = float(k % 7 == 0 ? 1.7 * rnd() : 0.6 * rnd());
-        const Vec3f rc(0, 0, 0);
-        const float rr = float(0.05 + 0.5 * rnd()), er = float(0.05 + 0.5 * rnd());
-        // The emitter's centre: anywhere, or along a direction at the receiver cone's
-        // edge plus the spread (the bracket's margin decides there).
-        Vec3d dir = rnd.Dir();
-        const double dist = k % 4 == 0 ? 0.3 + 0.5 * rnd() : 1.2 + 8 * rnd();
-        if (k % 2 == 1) {
-            const double alpha = std::asin(std::min(1.0, (double(rr) + er) / dist));
-            const double edge = tr + alpha + (k % 8 == 1 ? std::numbers::pi / 2 : 0) +
-                                (rnd() - 0.5) * (k % 16 == 1 ? 1e-6 : 1e-2);
-            dir = Vec3d(ar) * std::cos(edge) +
-                  Normalize(Cross(Vec3d(ar), rnd.Dir())) * std::sin(edge);
-        }
-        const Vec3f ec(dir * dist);
-        const LinkSide r{rc, rr, {ar, tr}}, e{ec, er, {ae, te}};
-        const double db_max = 0.5 + rnd(), power = 0.1 + rnd();
-        const double got = ConeLinkBound(db_max, power, r, e);
-        const double want = PlainConeLinkBound(db_max, power, r, e);
-        ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0)
-            << "k " << k << ": " << got << " vs " << want;
-        apart_axes += Dot(ar, ae) < 0.4999f && tr + te < 1.1f;
-        facing_away += want == 0;
-        within += want > 0 && want < db_max;
-    }
-    EXPECT_GT(apart_axes, 50000);
-    EXPECT_GT(facing_away, 10000);
-    EXPECT_GT(within, 10000);
 }
 
 // The tight sphere holds every sphere it was built from and is never larger than the
