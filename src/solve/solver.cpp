@@ -859,19 +859,25 @@ private:
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         // The pairs first, their segments only for the probes: the probes are a few of
         // the pairs, and building every pair's segment was most of this function's cost.
+        // The samples that can emit, in pair order, listed once instead of tested for
+        // every point (their centre and normal side by side for the point loop).
+        split_texels_.clear();
+        for (uint32_t b = 0; b < span; ++b)
+            for (uint32_t a = 0; a < span; ++a) {
+                const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
+                const auto& t = texels[k];
+                if (!(t.area <= 0 || t.db_max <= 0))
+                    split_texels_.push_back({k, t.pos, t.nrm});
+            }
         split_pairs_.clear();
         for (uint32_t p = 0; p < pts_.size(); ++p) {
             const ReceiverPoint& rp = pts_[p];
-            for (uint32_t b = 0; b < span; ++b)
-                for (uint32_t a = 0; a < span; ++a) {
-                    const uint32_t k = (lk.j * span + b) * row + lk.i * span + a;
-                    const auto& t = texels[k];
-                    const Vec3f d = t.pos - rp.position;
-                    if (t.area <= 0 || t.db_max <= 0 || Dot(d, rp.normal) <= 0 ||
-                        Dot(d, t.nrm) >= 0)
-                        continue;  // this pair cannot carry light
-                    split_pairs_.push_back({p, k});
-                }
+            for (const SplitTexel& st : split_texels_) {
+                const Vec3f d = st.pos - rp.position;
+                if (Dot(d, rp.normal) <= 0 || Dot(d, st.nrm) >= 0)
+                    continue;  // this pair cannot carry light
+                split_pairs_.push_back({p, st.k});
+            }
         }
         const size_t n = split_pairs_.size();
         const size_t probes = std::min(want, n / 2);
@@ -1068,6 +1074,11 @@ private:
         uint32_t point, texel;
     };
     std::vector<SplitPair> split_pairs_;  // SplitVisibility's pairs, in trace order
+    struct SplitTexel {
+        uint32_t k;  // the sample's index in its level
+        Vec3f pos, nrm;
+    };
+    std::vector<SplitTexel> split_texels_;  // SplitVisibility's samples that can emit
     struct RegionTexel {
         uint32_t i, j, k;  // the sample (i, j), k = j x row + i
         Vec3d pos, nrm;
