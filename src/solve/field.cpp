@@ -19,8 +19,7 @@ ChartField::ChartField(int order, int blocks)
 
 ChartField::ChartField(const ChartField& o)
     : order_(o.order_), blocks_(o.blocks_), stride_(o.stride_), count_(o.count_),
-      has_unshot_(o.has_unshot_), pulled_(o.pulled_),
-      own_nodes_(o.nodes().begin(), o.nodes().end()),
+      has_unshot_(o.has_unshot_), own_nodes_(o.nodes().begin(), o.nodes().end()),
       own_value_(o.values().begin(), o.values().end()),
       own_unshot_(o.unshots().begin(), o.unshots().end()), pending_(o.pending_) {
     PointAtOwn();
@@ -44,7 +43,6 @@ ChartField& ChartField::operator=(ChartField&& o) noexcept {
     stride_ = o.stride_;
     count_ = std::exchange(o.count_, 0);
     has_unshot_ = std::exchange(o.has_unshot_, false);
-    pulled_ = std::exchange(o.pulled_, false);
     // Moving a vector keeps its buffer, so the array pointers stay valid.
     nodes_ = std::exchange(o.nodes_, nullptr);
     value_ = std::exchange(o.value_, nullptr);
@@ -110,7 +108,6 @@ int32_t ChartField::Subdivide(size_t n) {
     InMemory();  // a pool's region does not grow
     CHECK(nodes_[n].leaf());
     CHECK_LT(nodes_[n].level, 30);
-    pulled_ = false;  // Pull(Push(x)) is x only up to rounding
     const int32_t first = int32_t(count_);
     const QuadNode parent = nodes_[n];
     own_nodes_[n].first_child = first;
@@ -167,7 +164,7 @@ void ChartField::EvalUnshot(double u, double v, float* out) const {
     EvalCoeffs(order_, unshot(n), blocks_, s, t, out);
 }
 
-void ChartField::PushDown(size_t n, const float* add, uint8_t* touched) {
+void ChartField::PushDown(size_t n, const float* add) {
     const size_t s = size_t(stride_);
     if (nodes_[n].leaf()) {
         for (size_t k = 0; k < s; ++k)
@@ -175,52 +172,38 @@ void ChartField::PushDown(size_t n, const float* add, uint8_t* touched) {
         if (has_unshot())
             for (size_t k = 0; k < s; ++k)
                 unshot_[n * s + k] += add[k];
-        if (touched)
-            touched[n] = 1;
         return;
     }
     float child[kMaxCoeffs * 9];
     CHECK_LE(stride_, kMaxCoeffs * 9);
     for (int c = 0; c < 4; ++c) {
         Push(order_, c, add, blocks_, child);
-        PushDown(size_t(nodes_[n].first_child + c), child, touched);
+        PushDown(size_t(nodes_[n].first_child + c), child);
     }
 }
 
 void ChartField::PushPending() {
     const size_t s = size_t(stride_);
     float add[kMaxCoeffs * 9];
-    // Once pulled, the interior nodes above no changed leaf keep their bits: a gather
-    // lights part of a chart, and Pull() was 3.5 % of pepper's instructions.
-    std::vector<uint8_t> touched(pulled_ ? count_ : 0, 0);
     for (size_t n = 0; n < pending_.size() / s; ++n) {
         float* p = &pending_[n * s];
         if (std::all_of(p, p + s, [](float x) { return x == 0.f; }))
             continue;
         std::memcpy(add, p, s * sizeof(float));
         std::fill(p, p + s, 0.f);
-        PushDown(n, add, pulled_ ? touched.data() : nullptr);
+        PushDown(n, add);
     }
     std::vector<float>().swap(pending_);
-    PullTouched(pulled_ ? touched.data() : nullptr);
+    Pull();
 }
 
 void ChartField::Pull() {
-    PullTouched(nullptr);
-}
-
-void ChartField::PullTouched(uint8_t* touched) {
     const size_t s = size_t(stride_);
     // Children always have larger indices than their parent: a reverse sweep is bottom-up.
     for (size_t n = count_; n-- > 0;) {
         if (nodes_[n].leaf())
             continue;
         const size_t c0 = size_t(nodes_[n].first_child);
-        if (touched) {
-            if (!(touched[c0] | touched[c0 + 1] | touched[c0 + 2] | touched[c0 + 3]))
-                continue;
-            touched[n] = 1;
-        }
         const float* kv[4] = {&value_[c0 * s], &value_[(c0 + 1) * s], &value_[(c0 + 2) * s],
                               &value_[(c0 + 3) * s]};
         const float* ku[4] = {};
@@ -236,10 +219,8 @@ void ChartField::PullTouched(uint8_t* touched) {
     own_unshot_.shrink_to_fit();
     if (!cache_)
         PointAtOwn();
-    pulled_ = true;
 }
 
-// Pull() keeps this: its sums start at +0, and +0 plus a product of +0 (+0 or -0) is +0.
 void ChartField::ClearUnshot() {
     if (has_unshot_)
         std::fill(unshot_, unshot_ + count_ * size_t(stride_), 0.f);
@@ -252,7 +233,6 @@ void ChartField::Assign(std::vector<QuadNode> nodes, std::vector<float> value,
     cache_ = nullptr;
     count_ = nodes.size();
     has_unshot_ = !unshot.empty();
-    pulled_ = false;
     own_nodes_ = std::move(nodes);
     own_value_ = std::move(value);
     own_unshot_ = std::move(unshot);

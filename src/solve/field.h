@@ -56,23 +56,13 @@ public:
     size_t node_count() const { return count_; }
     const QuadNode& node(size_t n) const { return nodes_[n]; }
 
-    // Writable access: the interior nodes are then no longer known to be their children's
-    // projection (pulled_), so the next PushPending() recomputes them all.
-    float* value(size_t n) {
-        pulled_ = false;
-        return &value_[n * size_t(stride_)];
-    }
-    float* unshot(size_t n) {
-        pulled_ = false;
-        return &unshot_[n * size_t(stride_)];
-    }
+    float* value(size_t n) { return &value_[n * size_t(stride_)]; }
+    float* unshot(size_t n) { return &unshot_[n * size_t(stride_)]; }
     float* pending(size_t n);
     const float* value(size_t n) const { return &value_[n * size_t(stride_)]; }
     const float* unshot(size_t n) const { return &unshot_[n * size_t(stride_)]; }
 
     bool has_unshot() const { return has_unshot_; }
-    // Whether the interior nodes are known to be their children's projection (pulled_).
-    bool pulled() const { return pulled_; }
     // Keeps a mapped field's region resident while alive (holds nothing in memory).
     RegionPin Pin() const { return cache_ ? cache_->Pin(region_) : RegionPin(); }
     bool mapped() const { return cache_ != nullptr; }
@@ -88,13 +78,10 @@ public:
     void EvalUnshot(double u, double v, float* out) const;
 
     // Pushes every pending set down to the leaves, adding it to their value and unshot,
-    // then clears pending and recomputes interior nodes by Pull(): after a Pull, only the
-    // ancestors of the leaves that changed (the others' children are as the last Pull left
-    // them, so it would give them the same bits).
+    // then clears pending and recomputes interior nodes by Pull().
     void PushPending();
     // Interior value and unshot = projection of their children (bottom-up).
     void Pull();
-    // Every unshot set to +0, which is also what Pull() makes of +0 children.
     void ClearUnshot();
 
     // Serialization support (checkpoints, solution files, the coefficient pool).
@@ -116,20 +103,13 @@ public:
     size_t MemoryBytes() const;
 
 private:
-    // Adds `add` (node n's basis) to n's subtree leaves, marking them in touched[].
-    void PushDown(size_t n, const float* add, uint8_t* touched);
-    // Pull() of the interior nodes with a touched child (all: touched null), bottom-up,
-    // marking those it recomputes.
-    void PullTouched(uint8_t* touched);
+    void PushDown(size_t n, const float* add);  // adds `add` (node n's basis) to n's subtree leaves
     void InMemory();      // copies a mapped field into its own vectors
     void PointAtOwn();    // the array pointers at the own vectors
 
     int order_ = 0, blocks_ = 0, stride_ = 0;
     size_t count_ = 0;
     bool has_unshot_ = false;
-    // Every interior node's value and unshot are Pull()'s projection of its children: set
-    // by Pull(); cleared by Subdivide(), Assign() and writable access.
-    bool pulled_ = false;
     // The arrays: the own vectors below, or a region of cache_.
     QuadNode* nodes_ = nullptr;
     float* value_ = nullptr;

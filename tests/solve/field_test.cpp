@@ -1,14 +1,9 @@
 // ChartField storage: the pending set exists only between the first pending() call and
 // PushPending(), which pushes it to the leaves exactly as before; a values-only field (as
-// read from a solution) holds no unshot set and still evaluates and subdivides; a gather's
-// PushPending recomputes only the interior nodes above changed leaves, with the bits of a
-// whole Pull.
+// read from a solution) holds no unshot set and still evaluates and subdivides.
 #include "solve/field.h"
 
 #include <gtest/gtest.h>
-
-#include <cstring>
-#include <random>
 
 namespace mebake::solve {
 namespace {
@@ -77,54 +72,6 @@ TEST(ChartField, ValuesOnlyFieldEvaluatesAndSubdivides) {
     values.pending(size_t(first))[0] = 5;
     values.PushPending();
     EXPECT_FALSE(values.has_unshot());
-}
-
-// Gathers that light a few nodes (the root now and then), with ClearUnshot and Subdivide
-// between them: after every PushPending the field holds exactly what a whole Pull gives.
-TEST(ChartField, PushPendingPullsAboveChangedLeavesAsAWholePull) {
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<float> val(-1.f, 1.f);
-    ChartField f(2, 9);
-    for (int k = 0; k < 40; ++k) {
-        size_t n = rng() % f.node_count();
-        while (!f.node(n).leaf())
-            n = size_t(f.node(n).first_child) + rng() % 4;
-        if (f.node(n).level < 6)
-            f.Subdivide(n);
-    }
-    for (size_t n = 0; n < f.node_count(); ++n)
-        for (int k = 0; k < f.stride(); ++k)
-            f.value(n)[k] = f.unshot(n)[k] = val(rng);
-    f.Pull();
-    auto same_bits = [](std::span<const float> a, std::span<const float> b) {
-        return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
-    };
-    int partial = 0;
-    for (int gather = 0; gather < 60; ++gather) {
-        if (gather % 7 == 3)
-            f.ClearUnshot();
-        if (gather % 11 == 5) {
-            size_t n = rng() % f.node_count();
-            while (!f.node(n).leaf())
-                n = size_t(f.node(n).first_child) + rng() % 4;
-            f.Subdivide(n);
-        }
-        const int lit = gather % 13 == 0 ? 1 : 1 + int(rng() % 3);
-        for (int l = 0; l < lit; ++l) {
-            const size_t n = gather % 13 == 0 ? 0 : 1 + rng() % (f.node_count() - 1);
-            for (int k = 0; k < f.stride(); ++k)
-                f.pending(n)[k] += val(rng);
-        }
-        if (f.pulled())
-            ++partial;  // the gather recomputes only the nodes above its lit leaves
-        f.PushPending();
-        EXPECT_TRUE(f.pulled());
-        ChartField whole(f);
-        whole.Pull();
-        ASSERT_TRUE(same_bits(f.values(), whole.values())) << gather;
-        ASSERT_TRUE(same_bits(f.unshots(), whole.unshots())) << gather;
-    }
-    EXPECT_GE(partial, 50);  // all but the gathers after a Subdivide (and the first)
 }
 
 }  // namespace
