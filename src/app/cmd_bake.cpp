@@ -78,6 +78,8 @@ int RunSolve(const SolveCommand& c) {
     opt.tolerance = c.tolerance;
     opt.max_bounces = c.max_bounces;
     opt.time_limit = c.time_limit;
+    opt.stop_fraction = c.stop_fraction;
+    opt.unshot_tail = c.unshot_tail;
     opt.threads = c.threads;
     opt.memory = ParseMemory(c.memory);
     opt.radiosity = c.unknown == "radiosity";

@@ -52,6 +52,8 @@ struct SolveCommand {
     double tolerance = -1;
     int max_bounces = -1;
     double time_limit = 0;
+    double stop_fraction = -1;        // < 0: the scene file's (default 2.5e-3)
+    std::string unshot_tail;          // on | off; empty: the scene file's
     int threads = 0;
     std::string memory = "1G";
     std::string unknown = "irradiance";

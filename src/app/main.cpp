@@ -142,6 +142,15 @@ int main(int argc, char** argv) {
     sol_cmd->add_option("--tolerance", sol.tolerance, "Relative error that triggers subdivision (default 0.02)");
     sol_cmd->add_option("--max-bounces", sol.max_bounces, "Shooting batches after the direct pass (default 16)");
     sol_cmd->add_option("--time-limit", sol.time_limit, "Stop shooting after this many seconds");
+    sol_cmd->add_option("--stop-fraction", sol.stop_fraction,
+                        "Stop shooting when the unshot power is below this fraction of the first "
+                        "shot's (default: the scene file's solver.stop_fraction, else 0.0025)")
+        ->check(CLI::Range(0.0, 0.5));
+    sol_cmd->add_option("--unshot-tail", sol.unshot_tail,
+                        "At that stop, add the bounces left as the last batch's light, scaled by "
+                        "its received / shot power (docs/method.md, \"The unshot tail\"); "
+                        "default: the scene file's solver.unshot_tail, else on")
+        ->check(CLI::IsMember({"on", "off"}));
     sol_cmd->add_option("--threads", sol.threads, "Worker threads (0: all cores)")->capture_default_str();
     sol_cmd->add_option("--memory", sol.memory, "Memory budget (e.g. 512M, 2G)")->capture_default_str();
     sol_cmd->add_option("--unknown", sol.unknown, "Solve for vector irradiance or radiosity")->capture_default_str()

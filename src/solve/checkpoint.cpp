@@ -36,6 +36,7 @@ struct Counters {
     uint64_t shots, rays;
     double seconds_direct, seconds_indirect, emitted_power, unshot_power;
     int32_t batches, reserved;
+    double shot_power;
 };
 
 template <typename T>
@@ -123,8 +124,11 @@ uint64_t WriteCheckpoint(const std::string& dir, const Solver& solver, uint64_t 
         w.Add(Tag("HEAD"), 0, Bytes(h), false);
         const SolveStats& st = solver.stats();
         Counters k{st.shots,         st.rays,         st.seconds_direct, st.seconds_indirect,
-                   st.emitted_power, st.unshot_power, st.batches,        0};
+                   st.emitted_power, st.unshot_power, st.batches,        0,
+                   st.shot_power};
         w.Add(Tag("STAT"), 0, Bytes(k), false);
+        w.AddArray(Tag("KEPT"), 0, st.chart_kept);
+        w.AddArray(Tag("RECV"), 0, st.chart_received);
         for (uint32_t c = 0; c < fields.size(); ++c) {
             if (kill_here && !hook.rotate && c == fields.size() / 2)
                 ::raise(SIGKILL);
@@ -172,6 +176,12 @@ Checkpoint ReadCheckpoint(const std::string& path, uint64_t key, int order, int 
     cp.stats.seconds_indirect = k.seconds_indirect;
     cp.stats.emitted_power = k.emitted_power;
     cp.stats.unshot_power = k.unshot_power;
+    cp.stats.shot_power = k.shot_power;
+    cp.stats.chart_kept = r.ReadArray<double>(Tag("KEPT"));
+    cp.stats.chart_received = r.ReadArray<double>(Tag("RECV"));
+    for (const auto* v : {&cp.stats.chart_kept, &cp.stats.chart_received})
+        if (!v->empty() && v->size() != charts)
+            CorruptError({path}, "{} per-chart powers for {} charts", v->size(), charts);
     if (!sink)
         cp.fields.reserve(charts);
     for (uint32_t c = 0; c < charts; ++c) {

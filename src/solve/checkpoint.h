@@ -24,7 +24,9 @@
 
 namespace mebake::solve {
 
-constexpr uint32_t kCheckpointVersion = 1;
+// 2: the unshot tail's state in the stats (session 21): shot_power, chart_kept and
+// chart_received.
+constexpr uint32_t kCheckpointVersion = 2;
 
 std::string CheckpointPath(const std::string& dir);      // dir/solve/checkpoint.bin
 std::string PrevCheckpointPath(const std::string& dir);  // dir/solve/checkpoint.prev.bin

@@ -153,6 +153,7 @@ void ReadSolverSettings(const json& s, const std::string& scene_file, SolverSett
     o->max_bounces = s.value("max_bounces", o->max_bounces);
     o->stop_fraction = s.value("stop_fraction", o->stop_fraction);
     o->chart_stop_fraction = s.value("chart_stop_fraction", o->chart_stop_fraction);
+    o->unshot_tail = s.value("unshot_tail", o->unshot_tail);
     o->sky_directions = s.value("sky_directions", o->sky_directions);
     o->light_samples = s.value("light_samples", o->light_samples);
     o->cluster_links = s.value("cluster_links", o->cluster_links);

@@ -46,7 +46,14 @@ struct SolverSettings {
     int order = 2;                // wavelet order M: 0 constant ... 3 cubic
     double tolerance = 0.02;      // relative error that triggers subdivision
     int max_bounces = 16;         // batches of shooting after the direct pass
-    double stop_fraction = 1e-3;  // stop when unshot power < this x emitted power
+    // Stop when unshot power < this x emitted power (1e-3 before session 21, without the
+    // tail below: 2.5e-3 with it is as accurate on every shared scan, lucy -1 batch).
+    double stop_fraction = 2.5e-3;
+    // At that stop, every node's value also takes its unshot coefficients x r / (1 - r), r
+    // its chart's received power in the last batch against the one before: the bounces
+    // left, as the last one's light (Solver::AddUnshotTail; docs/method.md, "The unshot
+    // tail"; false: before session 21).
+    bool unshot_tail = true;
     // ... and no chart's unshot power is this x its own reflected power (0: off, the
     // default: 0.01 converges narrow folds for +10 % of the horse's solve CPU)
     double chart_stop_fraction = 0;

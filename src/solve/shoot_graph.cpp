@@ -42,12 +42,18 @@
 namespace mebake::solve {
 
 size_t Solver::ShootBatch(const std::vector<double>& power, double largest, bool first,
-                          const std::vector<uint8_t>& lagging) {
+                          const std::vector<uint8_t>& lagging, double* shot_power,
+                          std::vector<double>* kept) {
     const uint32_t nc = uint32_t(charts_.size());
     std::vector<uint32_t> shooters;
+    *shot_power = 0;
+    kept->assign(power.begin(), power.end());
     for (uint32_t c = 0; c < nc; ++c)
-        if (power[c] > 0 && (first || lagging[c] || power[c] >= opt_.batch_fraction * largest))
+        if (power[c] > 0 && (first || lagging[c] || power[c] >= opt_.batch_fraction * largest)) {
             shooters.push_back(c);
+            *shot_power += power[c];
+            (*kept)[c] = 0;
+        }
     const size_t group = std::max<size_t>(1, opt_.emitter_group);
     const size_t groups = (shooters.size() + group - 1) / group;
     const uint64_t gathers = nc * groups;

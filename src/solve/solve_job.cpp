@@ -163,7 +163,8 @@ std::string SettingsText(const Scene& scene, const std::string& scene_file) {
         "light {} radiosity {} scene {}",
         kCheckpointVersion, s.order, s.tolerance, s.max_bounces, s.stop_fraction, s.time_limit,
         s.sky_directions, s.light_samples, s.radiosity ? 1 : 0, scene_hash) +
-        (s.multi_emitter_simplify ? " multi-emitter simplify" : "");
+        (s.multi_emitter_simplify ? " multi-emitter simplify" : "") +
+        (s.unshot_tail ? " unshot tail" : "");
 }
 
 using Clock = std::chrono::steady_clock;
@@ -184,6 +185,10 @@ Scene PrepareScene(const stream::Manifest& m, const SolveJobOptions& opt) {
         scene.solver.max_bounces = opt.max_bounces;
     if (opt.time_limit > 0)
         scene.solver.time_limit = opt.time_limit;
+    if (opt.stop_fraction >= 0)
+        scene.solver.stop_fraction = opt.stop_fraction;
+    if (!opt.unshot_tail.empty())
+        scene.solver.unshot_tail = opt.unshot_tail == "on";
     scene.solver.radiosity = opt.radiosity;
     if (!opt.multi_emitter.empty())
         scene.solver.multi_emitter_simplify = opt.multi_emitter == "simplify";
@@ -469,6 +474,7 @@ nlohmann::json StatsJson(const SolveJobOptions& opt, const SolveOptions& so, siz
     j["peak_rss_bytes"] = PeakRssBytes();
     j["emitted_power"] = st.emitted_power;
     j["unshot_power"] = st.unshot_power;
+    j["unshot_tail_gain"] = st.tail_gain;
     j["stop_reason"] = st.stop_reason;
     j["checkpoints"] = {{"count", checkpoints.count},
                         {"bytes", checkpoints.bytes},

@@ -22,6 +22,8 @@ struct SolveJobOptions {
     double tolerance = -1;
     int max_bounces = -1;
     double time_limit = 0;
+    double stop_fraction = -1;  // < 0: from the scene file (default 2.5e-3)
+    std::string unshot_tail;    // "on" or "off"; empty: the scene file's
     int threads = 0;
     uint64_t memory = uint64_t(1) << 30;
     bool radiosity = false;

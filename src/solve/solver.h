@@ -97,6 +97,11 @@ struct SolveStats {
     double seconds_direct = 0, seconds_indirect = 0;
     double emitted_power = 0;       // first-shot power (direct light reflected + emission)
     double unshot_power = 0;        // left when it stopped
+    double shot_power = 0;          // shot by the last batch (its shooters' unshot power)
+    // Per chart (the unshot tail's state, checkpointed): the unshot power the last batch
+    // did not shoot (0 where it shot), and the power received by the batch before it.
+    std::vector<double> chart_kept, chart_received;
+    double tail_gain = 0;           // mean r / (1 - r) of AddUnshotTail(), 0 when not added
     uint64_t cluster_links = 0;     // (shooter, cluster) links accepted
     uint64_t opened_links = 0;      // (shooter, chart) pairs left to chart-level links
     std::vector<uint64_t> nodes_per_level;
@@ -213,8 +218,14 @@ private:
     double ReceiverTau() const;
     double LinkToleranceScale() const;  // link_refine.h: the allowance per unit irradiance
     double ReferenceIrradiance() const;
+    // Returns the charts shot; *shot_power: their unshot power summed; kept[c]: chart c's
+    // unshot power when it does not shoot, else 0.
     size_t ShootBatch(const std::vector<double>& power, double largest, bool first,
-                      const std::vector<uint8_t>& lagging);
+                      const std::vector<uint8_t>& lagging, double* shot_power,
+                      std::vector<double>* kept);
+    // At the stop, the bounces not shot (SolverSettings::unshot_tail), from the power each
+    // chart received in the last two batches; returns the mean gain added (0: none).
+    double AddUnshotTail(const std::vector<double>& received);
     void CountNodes();
     void StoreField(uint32_t chart);  // into pool_, when there is one
     void RefineDirect(uint32_t chart);

@@ -85,6 +85,38 @@ TEST(Checkpoint, ResumedSolveIsBitIdentical) {
     }
 }
 
+// The unshot tail at the stop (SolverSettings::unshot_tail) takes the last batch's shot
+// power from the checkpoint: resumed at any boundary, the same bits and the same gain.
+TEST(Checkpoint, ResumedSolveWithTheUnshotTailIsBitIdentical) {
+    Box box;
+    SolveOptions opt = Options();
+    opt.settings.max_bounces = 16;
+    opt.settings.stop_fraction = 0.02;
+    opt.settings.unshot_tail = true;
+    Solver full(box.scene, box.charts, box.vis, opt);
+    full.Run();
+    ASSERT_EQ(full.stats().stop_reason, "converged");
+    ASSERT_GT(full.stats().tail_gain, 0);
+    ASSERT_GE(full.stats().batches, 2);
+    const std::vector<float> want = FieldBits(full);
+    for (int stop_at = 1; stop_at <= full.stats().batches; ++stop_at) {
+        const std::string dir = FreshDir("checkpoint-tail");
+        Solver first(box.scene, box.charts, box.vis, opt);
+        testing::StopWithCheckpointAt(first, dir, kKey, stop_at);
+        first.Run();
+        ASSERT_EQ(first.stats().stop_reason, "interrupted");
+        ThreadLimit limit(1);
+        auto cp = LoadCheckpoint(dir, kKey, 1, 9, box.charts.size());
+        ASSERT_TRUE(cp.has_value());
+        Solver second(box.scene, box.charts, box.vis, opt);
+        second.Restore(std::move(cp->fields), cp->reference, cp->next_batch, cp->stats);
+        second.Run();
+        EXPECT_TRUE(SameBits(FieldBits(second), want)) << "stopped before batch " << stop_at;
+        EXPECT_EQ(second.stats().tail_gain, full.stats().tail_gain);
+        fs::remove_all(fs::path(dir));
+    }
+}
+
 TEST(Checkpoint, RotationKeepsThePreviousAndDamageIsNamed) {
     Box box;
     const std::string dir = FreshDir("checkpoint-rot");

@@ -283,6 +283,9 @@ void CheckClosedCube(size_t emitter_group) {
     SolveOptions opt;
     opt.settings.max_bounces = 200;
     opt.settings.stop_fraction = 1e-4;
+    // The balance below is Southwell's own (what was shot and what is left); the tail adds
+    // light for the unshot power on top of it (checked in UnshotTailBrings...).
+    opt.settings.unshot_tail = false;
     opt.settings.tolerance = 0.01;
     opt.emitter_group = emitter_group;
     Solver solver(ts.scene, ts.charts, ts.vis, opt);
@@ -333,6 +336,74 @@ TEST(Solver, ClosedCubeAverageIrradianceAndEnergyBalance) {
 
 TEST(Solver, ClosedCubeWithEmittersInGroupsOfTwo) {
     CheckClosedCube(2);
+}
+
+// An early stop with the unshot tail (SolverSettings::unshot_tail) against the converged
+// solve, in the closed cube (the light's flux / (6 (1 - rho)) on average): at stop_fraction
+// 0.05 the truncated solve misses light everywhere (1-5 %). At albedo 0.4 (a ratio per
+// batch under the tail's cap, 0.5) the tail, r / (1 - r) of the last batch's light, must
+// take the mean within 0.5 % and every point at least three times closer than without it;
+// at 0.7 the cap binds (gain 1 where 2.3 would be right): closer, not within 0.5 %.
+void CheckUnshotTail(float rho, bool capped) {
+    TestScene ts;
+    ts.scene.per_input = {{Mat(rho)}};
+    PolygonLight light;
+    light.vertices = {
+        {0.45, 0.99, 0.45}, {0.55, 0.99, 0.45}, {0.55, 0.99, 0.55}, {0.45, 0.99, 0.55}};
+    light.radiance = {10, 10, 10};
+    ts.scene.lights.push_back(light);
+    for (const auto& f : CubeInterior())
+        ts.Add(MakePatch(f, 16, 0, 1));
+    ts.vis.Commit();
+    auto solve = [&](double stop, bool tail) {
+        SolveOptions opt;
+        opt.settings.max_bounces = 200;
+        opt.settings.stop_fraction = stop;
+        opt.settings.unshot_tail = tail;
+        auto s = std::make_unique<Solver>(ts.scene, ts.charts, ts.vis, opt);
+        s->Run();
+        return s;
+    };
+    const auto converged = solve(1e-5, false), cut = solve(0.05, false), tail = solve(0.05, true);
+    EXPECT_EQ(cut->stats().batches, tail->stats().batches);
+    EXPECT_LT(cut->stats().batches, converged->stats().batches);
+    EXPECT_EQ(cut->stats().tail_gain, 0);
+    EXPECT_GT(tail->stats().tail_gain, 0);
+    const double flux = std::numbers::pi * 10 * 0.01, expected = flux / (6 * (1 - rho));
+    double sum_cut = 0, sum_tail = 0, worst_cut = 0, worst_tail = 0;
+    const int n = 16;
+    for (uint32_t c = 0; c < 6; ++c) {
+        const Vec3d nrm(ts.charts[c].geometry.At(0, 0, 0).normal);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const double u = (i + 0.5) / n, v = (j + 0.5) / n;
+                const double e = Irradiance(*converged, c, u, v, nrm);
+                const double a = Irradiance(*cut, c, u, v, nrm);
+                const double b = Irradiance(*tail, c, u, v, nrm);
+                sum_cut += a;
+                sum_tail += b;
+                worst_cut = std::max(worst_cut, std::abs(a - e) / e);
+                worst_tail = std::max(worst_tail, std::abs(b - e) / e);
+            }
+    }
+    const double mean_cut = sum_cut / (6.0 * n * n), mean_tail = sum_tail / (6.0 * n * n);
+    std::printf("tail, albedo %.1f: %d batches (converged %d), gain %.4f; mean %.4f cut, %.4f "
+                "tail; worst %.4f cut, %.4f tail\n",
+                rho, tail->stats().batches, converged->stats().batches, tail->stats().tail_gain,
+                mean_cut / expected, mean_tail / expected, worst_cut, worst_tail);
+    EXPECT_LT(mean_cut, 0.995 * expected) << "the early stop should miss light";
+    EXPECT_GT(mean_tail, mean_cut);
+    EXPECT_LT(mean_tail, expected * 1.005);
+    EXPECT_LT(worst_tail, worst_cut);
+    if (!capped) {
+        EXPECT_NEAR(mean_tail, expected, 0.005 * expected);
+        EXPECT_LT(worst_tail, worst_cut / 3);
+    }
+}
+
+TEST(Solver, UnshotTailBringsAnEarlyStopToTheConvergedLight) {
+    CheckUnshotTail(0.4f, false);
+    CheckUnshotTail(0.7f, true);
 }
 
 // A 1 x 1 light at y = 2 facing down over a 6 x 6 black floor at y = 0 (a chart, 128
