@@ -326,6 +326,12 @@ GridOptions Perturbed() {
     o.offset = {0.3f, -0.25f, 0.2f, -0.3f, 0.15f, 0.f};  // 5-15 % of E_z
     return o;
 }
+// ... and neighbouring charts' vertex normals 17 degrees apart.
+GridOptions PerturbedAndTilted() {
+    GridOptions o = Perturbed();
+    o.tilt = 0.3f;
+    return o;
+}
 
 TEST_F(StitchTest, ExactFieldStaysExact) {
     const GridOptions o;
@@ -349,8 +355,7 @@ TEST_F(StitchTest, ExactFieldStaysExact) {
 }
 
 TEST_F(StitchTest, BordersShowOneValue) {
-    GridOptions o = Perturbed();
-    o.tilt = 0.3f;  // and neighbouring charts' vertex normals differ by 17 degrees
+    const GridOptions o = PerturbedAndTilted();
     WriteGridBake(dir_, o);
     const BakeView raw = OpenBakeView(dir_, FieldLoading::All, SeamStitching::Off);
     const BakeView view = OpenBakeView(dir_);
@@ -632,8 +637,7 @@ TEST_F(StitchTest, TexelsAreTheSameWhereverTheRowsLive) {
 }
 
 TEST_F(StitchTest, VertexCopiesAgree) {
-    GridOptions o = Perturbed();
-    o.tilt = 0.3f;
+    const GridOptions o = PerturbedAndTilted();
     WriteGridBake(dir_, o);
     const BakeView view = OpenBakeView(dir_);
     LoadShaders(view);
@@ -659,8 +663,7 @@ TEST_F(StitchTest, VertexCopiesAgree) {
 // point: inside the triangles, on their borders, in the inset's virtual margin and outside
 // the unit square (clamped).
 TEST_F(StitchTest, AtUvInsideIsInsideTriangleAndAtUv) {
-    GridOptions o = Perturbed();
-    o.tilt = 0.3f;
+    const GridOptions o = PerturbedAndTilted();
     WriteGridBake(dir_, o);
     const BakeView view = OpenBakeView(dir_);
     LoadShaders(view);
