@@ -163,9 +163,7 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     return p;
 }
 
-ShadingPoint ChartShader::AtUv(Vec2f u) const {
-    u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
-    const stream::GridLocation loc = tile_.grid.Locate(u);
+ShadingPoint ChartShader::AtLocation(Vec2f u, const stream::GridLocation& loc) const {
     if (loc.triangle == stream::kNoTriangle) {  // a chart without triangles
         ShadingPoint p;
         p.uv = u;
@@ -180,15 +178,17 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
     return p;
 }
 
+ShadingPoint ChartShader::AtUv(Vec2f u) const {
+    u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
+    return AtLocation(u, tile_.grid.Locate(u));
+}
+
 std::optional<ShadingPoint> ChartShader::AtUvInside(Vec2f u) const {
     u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
     const stream::GridLocation loc = tile_.grid.Locate(u);
     if (loc.triangle == stream::kNoTriangle || !loc.real)
         return std::nullopt;
-    ShadingPoint p =
-        AtTriangle(loc.triangle, loc.barycentric[0], loc.barycentric[1], loc.barycentric[2]);
-    p.uv = u;
-    return p;
+    return AtLocation(u, loc);
 }
 
 ShadingPoint ChartShader::AtVertex(uint32_t v) const {

@@ -154,6 +154,8 @@ public:
     const stream::ChartTile& tile() const { return tile_; }
 
 private:
+    // The point at u where the grid located it (a default point for a chart without triangles).
+    ShadingPoint AtLocation(Vec2f u, const stream::GridLocation& loc) const;
     Vec3f Color(uint32_t v) const;
     // The tile's vertex normals, with the stitched ones at chart borders.
     const std::vector<Vec3f>& Normals() const { return normal_.empty() ? tile_.normal : normal_; }
