@@ -133,6 +133,15 @@ bool CotanLaplacian::Solve(std::vector<double>* b, int columns) const {
                 ++start;
             if (start && size_t(start.index()) == i)
                 ++start;
+            if (k == 2 && x[2 * i] != 0 && x[2 * i + 1] != 0) {  // the usual case
+                const double t0 = x[2 * i], t1 = x[2 * i + 1];
+                for (Iter it = start; it; ++it) {
+                    const size_t j = 2 * size_t(it.index());
+                    x[j] -= t0 * it.value();
+                    x[j + 1] -= t1 * it.value();
+                }
+                continue;
+            }
             for (size_t c = 0; c < k; ++c) {
                 const double t = x[i * k + c];
                 if (t == 0)  // Eigen skips a zero (its sparse right-hand side shortcut)
