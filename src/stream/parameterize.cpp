@@ -189,12 +189,10 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     auto to = [&](uint32_t h) {
         return triangles[h / 3][(h % 3 + 1) % 3];
     };
-    auto key = [&](uint32_t h) {
-        return (uint64_t(from(h)) << 32) | to(h);
-    };
-    // Sorted by (key, h): a counting sort on `from` (stable, h ascending), then an
-    // insertion sort of each vertex's few outgoing half-edges by `to`.
-    std::vector<uint32_t> order(half_count);
+    // Sorted by (from, to, h): a counting sort on `from` (stable, h ascending), then an
+    // insertion sort of each vertex's few outgoing half-edges by `to`, which is kept beside
+    // (out_to[i] = to(order[i])): the twin of h is the half-edge leaving to(h) for from(h).
+    std::vector<uint32_t> order(half_count), out_to(half_count);
     std::vector<uint32_t> out_start(size_t(vertex_count) + 1, 0);
     {
         for (uint32_t h = 0; h < half_count; ++h)
@@ -202,29 +200,34 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
         for (uint32_t v = 0; v < vertex_count; ++v)
             out_start[v + 1] += out_start[v];
         std::vector<uint32_t> fill(out_start.begin(), out_start.end() - 1);
-        for (uint32_t h = 0; h < half_count; ++h)
-            order[fill[from(h)]++] = h;
+        for (uint32_t h = 0; h < half_count; ++h) {
+            const uint32_t i = fill[from(h)]++;
+            order[i] = h;
+            out_to[i] = to(h);
+        }
         for (uint32_t v = 0; v < vertex_count; ++v)
             for (uint32_t i = out_start[v] + 1; i < out_start[v + 1]; ++i)
-                for (uint32_t j = i; j > out_start[v] && to(order[j - 1]) > to(order[j]); --j)
+                for (uint32_t j = i; j > out_start[v] && out_to[j - 1] > out_to[j]; --j) {
                     std::swap(order[j - 1], order[j]);
+                    std::swap(out_to[j - 1], out_to[j]);
+                }
     }
-    for (uint32_t i = 1; i < half_count; ++i)
-        if (key(order[i]) == key(order[i - 1]))
-            return Fail(ParamStatus::kNonManifold,
-                        fmt::format("edge ({}, {}) is used twice in the same direction "
-                                    "(non-manifold edge or inconsistent orientation)",
-                                    from(order[i]), to(order[i])));
+    // A repeated directed edge is a repeated `to` next to itself in its vertex's run.
+    for (uint32_t v = 0; v < vertex_count; ++v)
+        for (uint32_t i = out_start[v] + 1; i < out_start[v + 1]; ++i)
+            if (out_to[i] == out_to[i - 1])
+                return Fail(ParamStatus::kNonManifold,
+                            fmt::format("edge ({}, {}) is used twice in the same direction "
+                                        "(non-manifold edge or inconsistent orientation)",
+                                        v, out_to[i]));
     std::vector<uint32_t> twin(half_count, kNone);
     for (uint32_t h = 0; h < half_count; ++h) {
-        const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
-        // Only the half-edges leaving to(h) can be its twin.
-        const auto first = order.begin() + out_start[to(h)];
-        const auto last = order.begin() + out_start[to(h) + 1];
-        auto it =
-            std::lower_bound(first, last, want, [&](uint32_t x, uint64_t k) { return key(x) < k; });
-        if (it != last && key(*it) == want)
-            twin[h] = *it;
+        const uint32_t v = to(h), back = from(h);
+        for (uint32_t i = out_start[v]; i < out_start[v + 1]; ++i)
+            if (out_to[i] == back) {  // at most one: no edge repeats
+                twin[h] = order[i];
+                break;
+            }
     }
 
     // Corners per vertex (CSR), unreferenced vertices, connectivity.
