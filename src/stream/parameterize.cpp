@@ -73,15 +73,17 @@ int FirstTrue(int lo, int hi, int guess, Pred holds) {
 // columns where one edge function is > 0 (or < 0) are a prefix or a suffix of the row:
 // each row's inside centres of either sign are one interval, found from where the edge
 // crosses the row and checked by the same float expression at its ends (the same texels
-// as testing every centre of the bounding box, without testing them).
+// as testing every centre of the bounding box, without testing them). The centres covered
+// at least once and at least twice are two bit sets, an interval marked a word at a time.
 double UvOverlapFraction(std::span<const std::array<uint32_t, 3>> triangles,
                          std::span<const Vec2f> uv, uint32_t res) {
-    std::vector<uint8_t> hit(size_t(res) * res, 0);
+    // Each row's centres as bits, 64 to a word.
+    const size_t words = (size_t(res) + 63) / 64;
+    std::vector<uint64_t> once(words * res, 0), twice(words * res, 0);
     const float r = float(res);
     std::vector<float> centre(res);  // a texel centre's coordinate, as the scan computed it
     for (uint32_t i = 0; i < res; ++i)
         centre[i] = (float(i) + 0.5f) / r;
-    size_t covered = 0, twice = 0;
     for (const auto& t : triangles) {
         const Vec2f a = uv[t[0]], b = uv[t[1]], c = uv[t[2]];
         const int i0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x}) * r - 0.5f)));
@@ -128,18 +130,25 @@ double UvOverlapFraction(std::span<const std::array<uint32_t, 3>> triangles,
                 }
             }
             const auto mark = [&](int lo, int hi) {
-                for (int i = lo; i <= hi; ++i) {
-                    uint8_t& h = hit[size_t(j) * res + size_t(i)];
-                    covered += h == 0;
-                    twice += h == 1;
-                    h = uint8_t(std::min(2, h + 1));
+                for (int i = lo; i <= hi;) {
+                    const int first = i % 64, end = std::min(hi, i - first + 63);
+                    const uint64_t bits = (~uint64_t(0) >> (63 - (end - i))) << first;
+                    const size_t w = size_t(j) * words + size_t(i / 64);
+                    twice[w] |= once[w] & bits;
+                    once[w] |= bits;
+                    i = end + 1;
                 }
             };
             mark(pos_lo, pos_hi);  // the two intervals are disjoint
             mark(neg_lo, neg_hi);
         }
     }
-    return covered ? double(twice) / double(covered) : 0;
+    size_t covered = 0, covered_twice = 0;
+    for (size_t w = 0; w < once.size(); ++w) {
+        covered += size_t(__builtin_popcountll(once[w]));
+        covered_twice += size_t(__builtin_popcountll(twice[w]));
+    }
+    return covered ? double(covered_twice) / double(covered) : 0;
 }
 
 namespace {
