@@ -246,14 +246,16 @@ ArapReport RefineArap(std::span<const FlatTriangle> flat,
             if (ft.area == 0)
                 continue;
             const auto& r = target[t];
+            const auto& f = triangles[t];
+            const bool at_anchor = f[0] == anchor || f[1] == anchor || f[2] == anchor;
             for (int i = 0; i < 3; ++i) {
-                const uint32_t ri = row[triangles[t][i]];
+                const uint32_t ri = row[f[i]];
                 if (ri == kFixed)
                     continue;
                 rhs[ri] += ft.area * (r[0] * ft.grad[i].x + r[1] * ft.grad[i].y);
                 rhs[ri + n] += ft.area * (r[2] * ft.grad[i].x + r[3] * ft.grad[i].y);
-                for (int j = 0; j < 3; ++j) {
-                    if (triangles[t][j] != anchor)
+                for (int j = 0; at_anchor && j < 3; ++j) {
+                    if (f[j] != anchor)
                         continue;
                     const double k = CotanWeight(ft, i, j);
                     rhs[ri] -= k * fixed.x;
