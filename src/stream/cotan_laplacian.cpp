@@ -43,8 +43,26 @@ std::vector<FlatTriangle> FlattenTriangles(std::span<const Vec3f> position,
     return flat;
 }
 
+namespace {
+
+// Eigen's AMDOrdering (OrderingMethods/Ordering.h) for the matrix SimplicialLDLT hands its
+// ordering, the full selfadjoint matrix: AMDOrdering first builds A^T + A, whose pattern is
+// then A's own, in the same sorted order, so the AMD routine gets a plain copy of A here
+// (the same permutation, without the transpose and the sparse sum; test
+// CotanLaplacian.SolveGivesEigensBits factorizes with Eigen's default and compares bits).
+struct SymmetricAmdOrdering {
+    using PermutationType = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
+    template <typename MatrixType>
+    void operator()(const MatrixType& a, PermutationType& perm) {
+        Eigen::SparseMatrix<typename MatrixType::Scalar, Eigen::ColMajor, int> pattern = a;
+        Eigen::internal::minimum_degree_ordering(pattern, perm);
+    }
+};
+
+}  // namespace
+
 struct CotanLaplacian::Impl {
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, SymmetricAmdOrdering> ldlt;
     std::vector<double> inverse_d;  // 1 / D, as Eigen's solve computes it
 };
 
