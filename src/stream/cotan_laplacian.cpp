@@ -64,6 +64,9 @@ struct SymmetricAmdOrdering {
 struct CotanLaplacian::Impl {
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, SymmetricAmdOrdering> ldlt;
     std::vector<double> inverse_d;  // 1 / D, as Eigen's solve computes it
+    // Solve's scratch, kept for the next solve (one thread solves with one Laplacian) and
+    // freed with the Laplacian.
+    std::vector<double> x;
 };
 
 CotanLaplacian::CotanLaplacian() : impl_(std::make_unique<Impl>()) {}
@@ -137,7 +140,7 @@ bool CotanLaplacian::Solve(std::vector<double>* b, int columns) const {
         pinv = ldlt.permutationPinv().indices().data();
     }
     // x[r * k + c]: row r of column c, after the permutation.
-    thread_local std::vector<double> x;
+    std::vector<double>& x = impl_->x;
     x.resize(n * k);
     for (size_t c = 0; c < k; ++c)
         for (size_t r = 0; r < n; ++r)
