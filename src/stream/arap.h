@@ -46,6 +46,19 @@ struct ArapReport {
 // Counts triangles whose uv orientation is not strictly counter-clockwise.
 uint32_t CountFlips(std::span<const Vec2d> uv, std::span<const std::array<uint32_t, 3>> triangles);
 
+// The local step's target for a triangle whose Jacobian (flat frame -> uv) is
+// [[a, b], [c, d]], authalic weight w, the authalic stretch clamped to [lo, hi]
+// (arap.cpp); the Batch form does kArapBatch triangles at once, with the same bits as
+// one call each.
+std::array<double, 4> ArapTarget(double a, double b, double c, double d, double w, double lo,
+                                 double hi);
+constexpr size_t kArapBatch = 8;
+struct ArapJacobians {
+    std::array<double, kArapBatch> a, b, c, d;
+};
+void ArapTargetBatch(const ArapJacobians& j, double w, double lo, double hi,
+                     std::array<std::array<double, 4>, kArapBatch>* out);
+
 // Refines *uv in place (scale included: the result is close to 3D lengths). The global
 // step solves with `laplacian`, factorized with exactly `anchor` fixed; the anchor keeps
 // its position.

@@ -52,7 +52,8 @@ public:
     // Row of each vertex, kFixed for fixed and unreferenced vertices.
     const std::vector<uint32_t>& row() const { return row_; }
     // Solves L x = b in place for `columns` right-hand sides stored column-major
-    // (b[c * size() + r]). False if the result is not finite.
+    // (b[c * size() + r]). False if the result is not finite. It uses scratch kept in the
+    // Laplacian: one thread at a time.
     bool Solve(std::vector<double>* b, int columns) const;
 
 private:

@@ -73,15 +73,17 @@ int FirstTrue(int lo, int hi, int guess, Pred holds) {
 // columns where one edge function is > 0 (or < 0) are a prefix or a suffix of the row:
 // each row's inside centres of either sign are one interval, found from where the edge
 // crosses the row and checked by the same float expression at its ends (the same texels
-// as testing every centre of the bounding box, without testing them).
+// as testing every centre of the bounding box, without testing them). The centres covered
+// at least once and at least twice are two bit sets, an interval marked a word at a time.
 double UvOverlapFraction(std::span<const std::array<uint32_t, 3>> triangles,
                          std::span<const Vec2f> uv, uint32_t res) {
-    std::vector<uint8_t> hit(size_t(res) * res, 0);
+    // Each row's centres as bits, 64 to a word.
+    const size_t words = (size_t(res) + 63) / 64;
+    std::vector<uint64_t> once(words * res, 0), twice(words * res, 0);
     const float r = float(res);
     std::vector<float> centre(res);  // a texel centre's coordinate, as the scan computed it
     for (uint32_t i = 0; i < res; ++i)
         centre[i] = (float(i) + 0.5f) / r;
-    size_t covered = 0, twice = 0;
     for (const auto& t : triangles) {
         const Vec2f a = uv[t[0]], b = uv[t[1]], c = uv[t[2]];
         const int i0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x}) * r - 0.5f)));
@@ -128,18 +130,25 @@ double UvOverlapFraction(std::span<const std::array<uint32_t, 3>> triangles,
                 }
             }
             const auto mark = [&](int lo, int hi) {
-                for (int i = lo; i <= hi; ++i) {
-                    uint8_t& h = hit[size_t(j) * res + size_t(i)];
-                    covered += h == 0;
-                    twice += h == 1;
-                    h = uint8_t(std::min(2, h + 1));
+                for (int i = lo; i <= hi;) {
+                    const int first = i % 64, end = std::min(hi, i - first + 63);
+                    const uint64_t bits = (~uint64_t(0) >> (63 - (end - i))) << first;
+                    const size_t w = size_t(j) * words + size_t(i / 64);
+                    twice[w] |= once[w] & bits;
+                    once[w] |= bits;
+                    i = end + 1;
                 }
             };
             mark(pos_lo, pos_hi);  // the two intervals are disjoint
             mark(neg_lo, neg_hi);
         }
     }
-    return covered ? double(twice) / double(covered) : 0;
+    size_t covered = 0, covered_twice = 0;
+    for (size_t w = 0; w < once.size(); ++w) {
+        covered += size_t(__builtin_popcountll(once[w]));
+        covered_twice += size_t(__builtin_popcountll(twice[w]));
+    }
+    return covered ? double(covered_twice) / double(covered) : 0;
 }
 
 namespace {
@@ -189,12 +198,10 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
     auto to = [&](uint32_t h) {
         return triangles[h / 3][(h % 3 + 1) % 3];
     };
-    auto key = [&](uint32_t h) {
-        return (uint64_t(from(h)) << 32) | to(h);
-    };
-    // Sorted by (key, h): a counting sort on `from` (stable, h ascending), then an
-    // insertion sort of each vertex's few outgoing half-edges by `to`.
-    std::vector<uint32_t> order(half_count);
+    // Sorted by (from, to, h): a counting sort on `from` (stable, h ascending), then an
+    // insertion sort of each vertex's few outgoing half-edges by `to`, which is kept beside
+    // (out_to[i] = to(order[i])): the twin of h is the half-edge leaving to(h) for from(h).
+    std::vector<uint32_t> order(half_count), out_to(half_count);
     std::vector<uint32_t> out_start(size_t(vertex_count) + 1, 0);
     {
         for (uint32_t h = 0; h < half_count; ++h)
@@ -202,29 +209,34 @@ DiscCheck CheckDisc(uint32_t vertex_count, std::span<const std::array<uint32_t, 
         for (uint32_t v = 0; v < vertex_count; ++v)
             out_start[v + 1] += out_start[v];
         std::vector<uint32_t> fill(out_start.begin(), out_start.end() - 1);
-        for (uint32_t h = 0; h < half_count; ++h)
-            order[fill[from(h)]++] = h;
+        for (uint32_t h = 0; h < half_count; ++h) {
+            const uint32_t i = fill[from(h)]++;
+            order[i] = h;
+            out_to[i] = to(h);
+        }
         for (uint32_t v = 0; v < vertex_count; ++v)
             for (uint32_t i = out_start[v] + 1; i < out_start[v + 1]; ++i)
-                for (uint32_t j = i; j > out_start[v] && to(order[j - 1]) > to(order[j]); --j)
+                for (uint32_t j = i; j > out_start[v] && out_to[j - 1] > out_to[j]; --j) {
                     std::swap(order[j - 1], order[j]);
+                    std::swap(out_to[j - 1], out_to[j]);
+                }
     }
-    for (uint32_t i = 1; i < half_count; ++i)
-        if (key(order[i]) == key(order[i - 1]))
-            return Fail(ParamStatus::kNonManifold,
-                        fmt::format("edge ({}, {}) is used twice in the same direction "
-                                    "(non-manifold edge or inconsistent orientation)",
-                                    from(order[i]), to(order[i])));
+    // A repeated directed edge is a repeated `to` next to itself in its vertex's run.
+    for (uint32_t v = 0; v < vertex_count; ++v)
+        for (uint32_t i = out_start[v] + 1; i < out_start[v + 1]; ++i)
+            if (out_to[i] == out_to[i - 1])
+                return Fail(ParamStatus::kNonManifold,
+                            fmt::format("edge ({}, {}) is used twice in the same direction "
+                                        "(non-manifold edge or inconsistent orientation)",
+                                        v, out_to[i]));
     std::vector<uint32_t> twin(half_count, kNone);
     for (uint32_t h = 0; h < half_count; ++h) {
-        const uint64_t want = (uint64_t(to(h)) << 32) | from(h);
-        // Only the half-edges leaving to(h) can be its twin.
-        const auto first = order.begin() + out_start[to(h)];
-        const auto last = order.begin() + out_start[to(h) + 1];
-        auto it =
-            std::lower_bound(first, last, want, [&](uint32_t x, uint64_t k) { return key(x) < k; });
-        if (it != last && key(*it) == want)
-            twin[h] = *it;
+        const uint32_t v = to(h), back = from(h);
+        for (uint32_t i = out_start[v]; i < out_start[v + 1]; ++i)
+            if (out_to[i] == back) {  // at most one: no edge repeats
+                twin[h] = order[i];
+                break;
+            }
     }
 
     // Corners per vertex (CSR), unreferenced vertices, connectivity.
