@@ -164,34 +164,33 @@ void ChartField::EvalUnshot(double u, double v, float* out) const {
     EvalCoeffs(order_, unshot(n), blocks_, s, t, out);
 }
 
-void ChartField::PushDown(size_t n, const float* add) {
+void ChartField::PushPending() {
+    // One sweep down the tree: a node's pending set goes to its leaf's value and unshot, or
+    // restricted (Push) into its children's pending sets, which come after it (Subdivide
+    // appends them). One Push per node and child instead of one per (pending ancestor,
+    // node) as pushing each pending set down its own subtree did (before session 22); the
+    // sums round in another order.
     const size_t s = size_t(stride_);
-    if (nodes_[n].leaf()) {
-        for (size_t k = 0; k < s; ++k)
-            value_[n * s + k] += add[k];
-        if (has_unshot())
-            for (size_t k = 0; k < s; ++k)
-                unshot_[n * s + k] += add[k];
-        return;
-    }
     float child[kMaxCoeffs * 9];
     CHECK_LE(stride_, kMaxCoeffs * 9);
-    for (int c = 0; c < 4; ++c) {
-        Push(order_, c, add, blocks_, child);
-        PushDown(size_t(nodes_[n].first_child + c), child);
-    }
-}
-
-void ChartField::PushPending() {
-    const size_t s = size_t(stride_);
-    float add[kMaxCoeffs * 9];
     for (size_t n = 0; n < pending_.size() / s; ++n) {
-        float* p = &pending_[n * s];
+        const float* p = &pending_[n * s];
         if (std::all_of(p, p + s, [](float x) { return x == 0.f; }))
             continue;
-        std::memcpy(add, p, s * sizeof(float));
-        std::fill(p, p + s, 0.f);
-        PushDown(n, add);
+        if (nodes_[n].leaf()) {
+            for (size_t k = 0; k < s; ++k)
+                value_[n * s + k] += p[k];
+            if (has_unshot())
+                for (size_t k = 0; k < s; ++k)
+                    unshot_[n * s + k] += p[k];
+            continue;
+        }
+        for (int c = 0; c < 4; ++c) {
+            Push(order_, c, p, blocks_, child);
+            float* kid = &pending_[size_t(nodes_[n].first_child + c) * s];
+            for (size_t k = 0; k < s; ++k)
+                kid[k] += child[k];
+        }
     }
     std::vector<float>().swap(pending_);
     Pull();

@@ -103,7 +103,6 @@ public:
     size_t MemoryBytes() const;
 
 private:
-    void PushDown(size_t n, const float* add);  // adds `add` (node n's basis) to n's subtree leaves
     void InMemory();      // copies a mapped field into its own vectors
     void PointAtOwn();    // the array pointers at the own vectors
 

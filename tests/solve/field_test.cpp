@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace mebake::solve {
 namespace {
 
@@ -43,6 +45,50 @@ TEST(ChartField, PendingLivesOnlyDuringAGather) {
     f.PushPending();
     EXPECT_EQ(f.value(2)[0], 2.f);
     EXPECT_EQ(f.MemoryBytes(), settled);
+}
+
+// PushPending sums nested pending sets top-down (one sweep, each node's set restricted into
+// its children's): the leaves get what pushing each set alone down its subtree gives, up to
+// rounding. Order 2 (Push is not the identity), sets on the root, an interior node and a
+// leaf at three depths, against one PushPending per set.
+TEST(ChartField, NestedPendingSetsSumTopDownAsPushedOneByOne) {
+    auto grow = [](ChartField* f) {
+        f->Subdivide(0);          // 1..4
+        f->Subdivide(2);          // 5..8
+        f->Subdivide(6);          // 9..12
+        f->Pull();
+    };
+    ChartField all(2, 3), one(2, 3);
+    grow(&all);
+    grow(&one);
+    const int s = all.stride();
+    auto set = [&](size_t n, int k) { return float((n + 1) * 0.37 + k * 0.11 - 0.9); };
+    for (size_t n : {0u, 2u, 6u, 11u}) {
+        for (int k = 0; k < s; ++k)
+            all.pending(n)[k] = set(n, k);
+        for (int k = 0; k < s; ++k)
+            one.pending(n)[k] = set(n, k);
+        one.PushPending();
+    }
+    all.PushPending();
+    for (size_t n = 0; n < all.node_count(); ++n) {
+        if (!all.node(n).leaf())
+            continue;
+        for (int k = 0; k < s; ++k) {
+            EXPECT_NEAR(all.value(n)[k], one.value(n)[k], 1e-5 * (1 + std::abs(one.value(n)[k])))
+                << n << " " << k;
+            EXPECT_NEAR(all.unshot(n)[k], one.unshot(n)[k],
+                        1e-5 * (1 + std::abs(one.unshot(n)[k])));
+        }
+    }
+    float a[3], b[3];
+    for (double u : {0.1, 0.55, 0.6, 0.9})
+        for (double v : {0.2, 0.45, 0.7}) {
+            all.EvalValue(u, v, a);
+            one.EvalValue(u, v, b);
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(a[k], b[k], 1e-5 * (1 + std::abs(b[k])));
+        }
 }
 
 TEST(ChartField, ValuesOnlyFieldEvaluatesAndSubdivides) {
