@@ -8,6 +8,19 @@
 
 namespace mebake::output {
 
+namespace {
+
+// Whether LeafAt would pick leaf q for (u, v) in the unit square: q's square, right and
+// top edges excluded but on the chart's border. LeafAt's halving steps are exact, so its
+// leaf is the one whose square holds the point by this rule; the corners (i, j) / 2^level
+// are exact doubles.
+bool Holds(const solve::QuadNode& q, double u, double v) {
+    const double hi_u = q.U(1), hi_v = q.V(1);
+    return q.U(0) <= u && (u < hi_u || hi_u == 1) && q.V(0) <= v && (v < hi_v || hi_v == 1);
+}
+
+}  // namespace
+
 ContinuousField::ContinuousField(const solve::ChartField& field, double max_delta) : field_(field) {
     double smallest = 1;
     for (const solve::QuadNode& n : field.nodes())
@@ -27,9 +40,7 @@ size_t ContinuousField::CentreLeaf(double u, double v, double* s, double* t) con
     thread_local size_t last_leaf = 0;
     if (last_field == &field_ && last_leaf < field_.node_count()) {
         const solve::QuadNode& q = field_.node(last_leaf);
-        const double hi_u = q.U(1), hi_v = q.V(1);
-        if (q.leaf() && q.U(0) <= u && (u < hi_u || hi_u == 1) && q.V(0) <= v &&
-            (v < hi_v || hi_v == 1)) {
+        if (q.leaf() && Holds(q, u, v)) {
             *s = std::clamp(u / q.size() - double(q.i), 0.0, 1.0);
             *t = std::clamp(v / q.size() - double(q.j), 0.0, 1.0);
             return last_leaf;
@@ -50,23 +61,32 @@ void ContinuousField::Eval(double u, double v, float* out) const {
     // answer from five). A leaf holds the points of its node's square, right and top edges
     // excluded but on the chart's border (LeafAt's halving steps are exact); the square's
     // corners (i, j) / 2^level are exact doubles.
+    double centre_s, centre_t;
+    const size_t centre = CentreLeaf(u, v, &centre_s, &centre_t);
     {
-        double s, t;
-        const size_t n = CentreLeaf(u, v, &s, &t);
-        const solve::QuadNode& q = field_.node(n);
+        const solve::QuadNode& q = field_.node(centre);
         const double hi_u = q.U(1), hi_v = q.V(1);
         if (q.U(0) <= u0 && (u1 < hi_u || hi_u == 1) && q.V(0) <= v0 && (v1 < hi_v || hi_v == 1)) {
-            solve::EvalCoeffs(field_.order(), field_.value(n), blocks, s, t, out);
+            solve::EvalCoeffs(field_.order(), field_.value(centre), blocks, centre_s, centre_t,
+                              out);
             return;
         }
     }
-    // The leaves at the box's corners cover it (each is at least 2 delta wide).
+    // The leaves at the box's corners cover it (each is at least 2 delta wide), listed in
+    // corner order. A corner mostly lies in a leaf already known (another corner's or the
+    // centre's): those are asked first (LeafAt's own rule), a descent only for the rest.
     std::array<size_t, 4> leaves{};
     int count = 0;
     for (const double cv : {v0, v1})
         for (const double cu : {u0, u1}) {
-            double s, t;
-            const size_t n = field_.LeafAt(cu, cv, &s, &t);
+            const auto known = std::find_if(leaves.begin(), leaves.begin() + count, [&](size_t n) {
+                return Holds(field_.node(n), cu, cv);
+            });
+            if (known != leaves.begin() + count)
+                continue;
+            double cs, ct;
+            const size_t n = Holds(field_.node(centre), cu, cv) ? centre
+                                                                : field_.LeafAt(cu, cv, &cs, &ct);
             if (std::find(leaves.begin(), leaves.begin() + count, n) == leaves.begin() + count)
                 leaves[size_t(count++)] = n;
         }
