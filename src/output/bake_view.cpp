@@ -141,8 +141,12 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     // The stitched normals of border vertices hold on the border and fade out with the
     // stitch's band: spread over whole triangles they turned lucy's shading from the
     // mesh's (bench/RESULTS.md, "Issue 14 (session 9)").
-    if (!normal_.empty())
-        n += (shared - n) * seams_->Fade(uv.x, uv.y);
+    // Where the stitch left the three normals alone (shared == n), the fade multiplies
+    // zeros (+-0, whatever fade in [0, 1] is): it is not looked up.
+    if (!normal_.empty()) {
+        const bool same = shared.x == n.x && shared.y == n.y && shared.z == n.z;
+        n += (shared - n) * (same ? 0.0 : seams_->Fade(uv.x, uv.y));
+    }
     n = Normalize(n);
     // A shading normal on the wrong side of its triangle (vertex normals averaged over a
     // fold that turns back on itself), or none, falls back to the triangle's plane, as the
