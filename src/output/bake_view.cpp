@@ -189,7 +189,7 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
 
 std::optional<ShadingPoint> ChartShader::AtUvInside(Vec2f u) const {
     u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
-    const stream::GridLocation loc = tile_.grid.Locate(u);
+    const stream::GridLocation loc = tile_.grid.LocateReal(u);
     if (loc.triangle == stream::kNoTriangle || !loc.real)
         return std::nullopt;
     return AtLocation(u, loc);

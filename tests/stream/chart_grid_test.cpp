@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <fmt/format.h>
 #include <functional>
 #include <numbers>
@@ -483,7 +484,8 @@ namespace {
 
 TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
     // Random points over the whole square, and points on the chart's edges and vertices
-    // (the tolerance band): InsideTriangle is Locate's answer for real points, none else.
+    // (the tolerance band): InsideTriangle is Locate's answer for real points, none else,
+    // and LocateReal is Locate's whole location (bit for bit) for real points, none else.
     const TriMesh m = GridPatch(33, 5, Cap, [](int i, int j) { return !(i > 10 && j < 8); });
     const ChartParam p = ParameterizeChart(m);
     ASSERT_TRUE(HasUv(p.status)) << p.message;
@@ -501,11 +503,22 @@ TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
         const GridLocation loc = grid.Locate(q);
         const uint32_t inside = grid.InsideTriangle(q);
         EXPECT_EQ(inside, loc.real ? loc.triangle : kNoTriangle) << q.x << " " << q.y;
+        const GridLocation own = grid.LocateReal(q);
+        EXPECT_EQ(own.real, loc.real);
+        if (loc.real) {
+            EXPECT_EQ(own.triangle, loc.triangle);
+            EXPECT_EQ(std::memcmp(&own.barycentric, &loc.barycentric, sizeof loc.barycentric), 0);
+            EXPECT_EQ(std::memcmp(&own.nearest_uv, &loc.nearest_uv, sizeof loc.nearest_uv), 0);
+            EXPECT_EQ(std::bit_cast<uint32_t>(own.distance), std::bit_cast<uint32_t>(loc.distance));
+        } else {
+            EXPECT_EQ(own.triangle, kNoTriangle);
+        }
         real += loc.real;
     }
     EXPECT_GT(real, 5000u);
     EXPECT_LT(real, points.size());
     EXPECT_EQ(ChartGrid{}.InsideTriangle(Vec2f(0.5f, 0.5f)), kNoTriangle);
+    EXPECT_EQ(ChartGrid{}.LocateReal(Vec2f(0.5f, 0.5f)).triangle, kNoTriangle);
 }
 
 TEST(ChartGrid, PointsJustOutsideAnEdgeAreRealWithinTheTolerance) {
