@@ -141,8 +141,12 @@ ShadingPoint ChartShader::AtTriangle(uint32_t t, float b0, float b1, float b2) c
     // The stitched normals of border vertices hold on the border and fade out with the
     // stitch's band: spread over whole triangles they turned lucy's shading from the
     // mesh's (bench/RESULTS.md, "Issue 14 (session 9)").
-    if (!normal_.empty())
-        n += (shared - n) * seams_->Fade(uv.x, uv.y);
+    // Where the stitch left the three normals alone (shared == n), the fade multiplies
+    // zeros (+-0, whatever fade in [0, 1] is): it is not looked up.
+    if (!normal_.empty()) {
+        const bool same = shared.x == n.x && shared.y == n.y && shared.z == n.z;
+        n += (shared - n) * (same ? 0.0 : seams_->Fade(uv.x, uv.y));
+    }
     n = Normalize(n);
     // A shading normal on the wrong side of its triangle (vertex normals averaged over a
     // fold that turns back on itself), or none, falls back to the triangle's plane, as the
@@ -185,7 +189,7 @@ ShadingPoint ChartShader::AtUv(Vec2f u) const {
 
 std::optional<ShadingPoint> ChartShader::AtUvInside(Vec2f u) const {
     u = Vec2f(std::clamp(u.x, 0.f, 1.f), std::clamp(u.y, 0.f, 1.f));
-    const stream::GridLocation loc = tile_.grid.Locate(u);
+    const stream::GridLocation loc = tile_.grid.LocateReal(u);
     if (loc.triangle == stream::kNoTriangle || !loc.real)
         return std::nullopt;
     return AtLocation(u, loc);

@@ -135,7 +135,8 @@ public:
     // Chart point u (clamped to the unit square), located in the chart's grid.
     ShadingPoint AtUv(Vec2f u) const;
     // AtUv(u) when u lies in a triangle of the chart (ChartGrid::InsideTriangle's test,
-    // the same location), nullopt in the virtual part: one search for both.
+    // the same location), nullopt in the virtual part: one search for both, and none for
+    // the virtual part's nearest triangle (ChartGrid::LocateReal).
     std::optional<ShadingPoint> AtUvInside(Vec2f u) const;
     // Tile vertex v: its own uv, normal and colour; the material of the lowest-index
     // triangle that uses it (the default material if none does).

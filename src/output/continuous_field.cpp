@@ -5,8 +5,32 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstdint>
 
 namespace mebake::output {
+
+namespace {
+
+// A leaf's square, [lo_u, hi_u] x [lo_v, hi_v]: its corners (i, j) / 2^level are exact
+// doubles (QuadNode::U and V), made here without QuadNode::size()'s division.
+struct LeafSquare {
+    double lo_u, hi_u, lo_v, hi_v;
+
+    explicit LeafSquare(const solve::QuadNode& q) {
+        const double size = std::bit_cast<double>(uint64_t(1023 - q.level) << 52);  // 2^-level
+        lo_u = double(q.i) * size, hi_u = (double(q.i) + 1) * size;
+        lo_v = double(q.j) * size, hi_v = (double(q.j) + 1) * size;
+    }
+    // Whether LeafAt would pick this leaf for (u, v) in the unit square: right and top
+    // edges excluded but on the chart's border. LeafAt's halving steps are exact, so its
+    // leaf is the one whose square holds the point by this rule.
+    bool Holds(double u, double v) const {
+        return lo_u <= u && (u < hi_u || hi_u == 1) && lo_v <= v && (v < hi_v || hi_v == 1);
+    }
+};
+
+}  // namespace
 
 ContinuousField::ContinuousField(const solve::ChartField& field, double max_delta) : field_(field) {
     double smallest = 1;
@@ -27,9 +51,7 @@ size_t ContinuousField::CentreLeaf(double u, double v, double* s, double* t) con
     thread_local size_t last_leaf = 0;
     if (last_field == &field_ && last_leaf < field_.node_count()) {
         const solve::QuadNode& q = field_.node(last_leaf);
-        const double hi_u = q.U(1), hi_v = q.V(1);
-        if (q.leaf() && q.U(0) <= u && (u < hi_u || hi_u == 1) && q.V(0) <= v &&
-            (v < hi_v || hi_v == 1)) {
+        if (q.leaf() && LeafSquare(q).Holds(u, v)) {
             *s = std::clamp(u / q.size() - double(q.i), 0.0, 1.0);
             *t = std::clamp(v / q.size() - double(q.j), 0.0, 1.0);
             return last_leaf;
@@ -50,23 +72,29 @@ void ContinuousField::Eval(double u, double v, float* out) const {
     // answer from five). A leaf holds the points of its node's square, right and top edges
     // excluded but on the chart's border (LeafAt's halving steps are exact); the square's
     // corners (i, j) / 2^level are exact doubles.
-    {
-        double s, t;
-        const size_t n = CentreLeaf(u, v, &s, &t);
-        const solve::QuadNode& q = field_.node(n);
-        const double hi_u = q.U(1), hi_v = q.V(1);
-        if (q.U(0) <= u0 && (u1 < hi_u || hi_u == 1) && q.V(0) <= v0 && (v1 < hi_v || hi_v == 1)) {
-            solve::EvalCoeffs(field_.order(), field_.value(n), blocks, s, t, out);
-            return;
-        }
+    double centre_s, centre_t;
+    const size_t centre = CentreLeaf(u, v, &centre_s, &centre_t);
+    const LeafSquare sq(field_.node(centre));
+    if (sq.lo_u <= u0 && (u1 < sq.hi_u || sq.hi_u == 1) && sq.lo_v <= v0 &&
+        (v1 < sq.hi_v || sq.hi_v == 1)) {
+        solve::EvalCoeffs(field_.order(), field_.value(centre), blocks, centre_s, centre_t, out);
+        return;
     }
-    // The leaves at the box's corners cover it (each is at least 2 delta wide).
+    // The leaves at the box's corners cover it (each is at least 2 delta wide), listed in
+    // corner order. A point lies in one leaf by LeafAt's rule, so a corner the centre's
+    // leaf holds, or the leaf the last descent found, needs no descent from the root.
     std::array<size_t, 4> leaves{};
     int count = 0;
+    size_t found = centre;
     for (const double cv : {v0, v1})
         for (const double cu : {u0, u1}) {
-            double s, t;
-            const size_t n = field_.LeafAt(cu, cv, &s, &t);
+            size_t n = centre;
+            if (!sq.Holds(cu, cv)) {
+                double cs, ct;
+                n = found != centre && LeafSquare(field_.node(found)).Holds(cu, cv)
+                        ? found
+                        : (found = field_.LeafAt(cu, cv, &cs, &ct));
+            }
             if (std::find(leaves.begin(), leaves.begin() + count, n) == leaves.begin() + count)
                 leaves[size_t(count++)] = n;
         }

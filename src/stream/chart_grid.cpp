@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 namespace mebake::stream {
 
@@ -342,6 +343,22 @@ bool LocateInside(const ChartGrid& g, const Vec2d& u, size_t cell, LocateResult*
     return r.real;
 }
 
+// A lower bound of ClosestPoint(t, u).dist2 as computed: the distance to t's bounding box
+// less 1e-12 per axis (the closest point's rounding is ~1e-16 in the unit square), and 0
+// within 1e-9 of the box (where the rounded barycentric test could call u inside a sliver).
+double NearestLowerBound2(const Tri2& t, const Vec2d& u) {
+    const double lo_x = std::min({t.p[0].x, t.p[1].x, t.p[2].x});
+    const double hi_x = std::max({t.p[0].x, t.p[1].x, t.p[2].x});
+    const double lo_y = std::min({t.p[0].y, t.p[1].y, t.p[2].y});
+    const double hi_y = std::max({t.p[0].y, t.p[1].y, t.p[2].y});
+    const double dx = std::max({lo_x - u.x, 0.0, u.x - hi_x});
+    const double dy = std::max({lo_y - u.y, 0.0, u.y - hi_y});
+    if (!(std::max(dx, dy) > 1e-9))  // NaN too
+        return 0;
+    const double ex = std::max(dx - 1e-12, 0.0), ey = std::max(dy - 1e-12, 0.0);
+    return (ex * ex + ey * ey) * (1 - 1e-12);
+}
+
 size_t CellOf(const ChartGrid& g, const Vec2d& u) {
     const int res = g.resolution;
     const int ix = std::min(int(u.x * res), res - 1), iy = std::min(int(u.y * res), res - 1);
@@ -368,16 +385,43 @@ LocateResult LocateDouble(const ChartGrid& g, Vec2f u_in) {
         begin = g.outline_tris.data();
         end = begin + g.outline_tris.size();
     }
+    // The nearest candidate, the lowest index among equally near ones, as a scan in index
+    // order keeping the first strictly nearer one finds it. The candidate whose box is
+    // nearest is measured first; then only those whose box is not farther than the best
+    // distance found can be as near (most of a cell's candidates are not). A long list (the
+    // fallback) is scanned plainly.
+    const size_t n = size_t(end - begin);
+    if (n == 0)
+        return r;
+    constexpr size_t kMaxBounds = 64;
+    double bound[kMaxBounds];
+    size_t first = 0;
+    if (n <= kMaxBounds) {
+        for (size_t k = 0; k < n; ++k) {
+            bound[k] = NearestLowerBound2(TriangleAt(g, begin[k]), u);
+            if (bound[k] < bound[first])
+                first = k;
+        }
+    }
     r.dist2 = INFINITY;
-    for (const uint32_t* t = begin; t != end; ++t) {
-        const Closest c = ClosestPoint(TriangleAt(g, *t), u);
-        if (c.dist2 < r.dist2) {
+    auto measure = [&](uint32_t t) {
+        const Closest c = ClosestPoint(TriangleAt(g, t), u);
+        if (c.dist2 < r.dist2 || (c.dist2 == r.dist2 && r.dist2 < INFINITY && t < r.triangle)) {
             r.dist2 = c.dist2;
-            r.triangle = *t;
+            r.triangle = t;
             std::copy(c.b, c.b + 3, r.b);
             r.nearest = c.point;
         }
+    };
+    if (n > kMaxBounds) {
+        for (size_t k = 0; k < n; ++k)
+            measure(begin[k]);
+        return r;
     }
+    measure(begin[first]);
+    for (size_t k = 0; k < n; ++k)
+        if (k != first && !(bound[k] > r.dist2))
+            measure(begin[k]);
     return r;
 }
 
@@ -539,8 +583,9 @@ ChartGrid BuildChartGrid(const std::vector<Vec2f>& uv,
     return g;
 }
 
-GridLocation ChartGrid::Locate(Vec2f u) const {
-    const LocateResult r = LocateDouble(*this, u);
+namespace {
+
+GridLocation ToGridLocation(const LocateResult& r) {
     GridLocation out;
     out.triangle = r.triangle;
     out.real = r.real;
@@ -549,6 +594,20 @@ GridLocation ChartGrid::Locate(Vec2f u) const {
     out.nearest_uv = Vec2f(float(r.nearest.x), float(r.nearest.y));
     out.distance = float(std::sqrt(r.dist2));
     return out;
+}
+
+}  // namespace
+
+GridLocation ChartGrid::Locate(Vec2f u) const {
+    return ToGridLocation(LocateDouble(*this, u));
+}
+
+GridLocation ChartGrid::LocateReal(Vec2f u_in) const {
+    if (triangles.empty())
+        return {};
+    const Vec2d u = ClampToSquare(u_in);
+    LocateResult r;
+    return LocateInside(*this, u, CellOf(*this, u), &r) ? ToGridLocation(r) : GridLocation{};
 }
 
 uint32_t ChartGrid::InsideTriangle(Vec2f u_in) const {

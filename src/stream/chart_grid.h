@@ -23,7 +23,8 @@ namespace mebake::stream {
 constexpr uint32_t kNoTriangle = ~uint32_t(0);
 
 struct GridLocation {
-    uint32_t triangle = kNoTriangle;     // kNoTriangle only for a grid without triangles
+    uint32_t triangle = kNoTriangle;     // kNoTriangle: a grid without triangles (or
+                                         // LocateReal's virtual point)
     std::array<float, 3> barycentric{};  // of u (real) or of nearest_uv (virtual); sum 1
     bool real = false;                   // u lies in a triangle of the chart
     Vec2f nearest_uv;                    // u itself when real
@@ -50,6 +51,9 @@ struct ChartGrid {
     // Locate(u).triangle when Locate(u).real, else kNoTriangle, without the nearest-triangle
     // search of the virtual part.
     uint32_t InsideTriangle(Vec2f u) const;
+    // Locate(u) when Locate(u).real, else a location with triangle kNoTriangle (and real
+    // false), without the nearest-triangle search of the virtual part.
+    GridLocation LocateReal(Vec2f u) const;
 
     size_t MemoryBytes() const;
 };

@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <fmt/format.h>
 #include <functional>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 namespace mebake::stream {
 namespace {
@@ -249,6 +252,138 @@ TEST(ChartGrid, TriangleSoupWithFlippedAndDegenerateTriangles) {
     CheckAgainstBruteForce(grid, RandomPoints(3000, 8));
 }
 
+// The virtual part as it was computed before the candidates were visited nearest box
+// first (chart_grid.cpp at ac3f9c9): every candidate of u's cell in ascending order, the
+// first strictly nearer one kept. Its arithmetic is the grid's own, copied.
+struct PlainNearest {
+    uint32_t triangle = kNoTriangle;
+    double b[3] = {1, 0, 0};
+    Vec2d nearest;
+    double dist2 = INFINITY;
+};
+
+PlainNearest PlainVirtualScan(const ChartGrid& g, Vec2f s) {
+    const Vec2d u(std::clamp(double(s.x), 0.0, 1.0), std::clamp(double(s.y), 0.0, 1.0));
+    const int res = g.resolution;
+    const size_t cell = size_t(std::min(int(u.y * res), res - 1)) * res +
+                        size_t(std::min(int(u.x * res), res - 1));
+    const uint32_t* begin = g.near_tris.data() + g.near_start[cell];
+    const uint32_t* end = g.near_tris.data() + g.near_start[cell + 1];
+    if (begin == end) {
+        begin = g.outline_tris.data();
+        end = begin + g.outline_tris.size();
+    }
+    PlainNearest r;
+    for (const uint32_t* t = begin; t != end; ++t) {
+        Vec2d p[3];
+        for (int k = 0; k < 3; ++k)
+            p[k] = D(g.uv[g.triangles[*t][k]]);
+        double dist2 = INFINITY, b[3] = {1, 0, 0};
+        Vec2d point;
+        const double area = Cross(p[1] - p[0], p[2] - p[0]);
+        bool inside = false;
+        if (area != 0 && std::isfinite(area)) {
+            b[0] = Cross(p[1] - u, p[2] - u) / area;
+            b[1] = Cross(p[2] - u, p[0] - u) / area;
+            b[2] = 1 - b[0] - b[1];
+            inside = b[0] >= 0 && b[1] >= 0 && b[2] >= 0;
+        }
+        if (inside) {
+            dist2 = 0;
+            point = u;
+        } else {
+            b[0] = 1, b[1] = 0, b[2] = 0;
+            for (int k = 0; k < 3; ++k) {
+                const Vec2d& a = p[k];
+                const Vec2d e = p[(k + 1) % 3] - a;
+                const double len2 = Dot(e, e);
+                const double f = len2 > 0 ? std::clamp(Dot(u - a, e) / len2, 0.0, 1.0) : 0.0;
+                const Vec2d q = a + e * f;
+                const double d2 = Dot(u - q, u - q);
+                if (d2 < dist2) {
+                    dist2 = d2;
+                    b[k] = 1 - f;
+                    b[(k + 1) % 3] = f;
+                    b[(k + 2) % 3] = 0;
+                    point = q;
+                }
+            }
+        }
+        if (dist2 < r.dist2) {
+            r.dist2 = dist2;
+            r.triangle = *t;
+            std::copy(b, b + 3, r.b);
+            r.nearest = point;
+        }
+    }
+    return r;
+}
+
+// Locate's virtual answers are the plain scan's to the bit: the same triangle among
+// equally near ones (a virtual point beyond an outline vertex is as near to every
+// triangle at it), the same barycentrics, nearest point and distance. Charts with a notch,
+// a soup with flipped and degenerate triangles; random points and a lattice through the
+// outline's vertices.
+TEST(ChartGrid, VirtualPointsGiveThePlainScansBits) {
+    const TriMesh notch = GridPatch(
+        25, 5, [](double x, double y) { return Vec3d(x, y, 0); },
+        [](int i, int j) { return !(i >= 8 && i < 16 && j >= 6); });
+    std::vector<Vec2f> notch_uv;
+    for (const Vec3f& q : notch.position)
+        notch_uv.push_back(Vec2f(0.1f + 0.8f * q.x, 0.15f + 0.7f * q.y));
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> at(0.1f, 0.9f), d(-0.08f, 0.08f);
+    std::vector<Vec2f> soup_uv;
+    Tris soup;
+    for (uint32_t t = 0; t < 60; ++t) {
+        const Vec2f c(at(rng), at(rng));
+        soup_uv.push_back(c + Vec2f(d(rng), d(rng)));
+        soup_uv.push_back(c + Vec2f(d(rng), d(rng)));
+        soup_uv.push_back(t % 10 == 0 ? soup_uv.back() : c + Vec2f(d(rng), d(rng)));
+        soup.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+    }
+    const TriMesh cap = GridPatch(17, 3, Cap);
+    const ChartParam cap_param = ParameterizeChart(cap);
+    ASSERT_TRUE(HasUv(cap_param.status));
+    std::vector<Vec2f> points = RandomPoints(3000, 22);
+    for (int j = 0; j <= 64; ++j)  // a lattice: rows of texel centres hit vertices' rows
+        for (int i = 0; i <= 64; ++i)
+            points.push_back(Vec2f(float(i) / 64, float(j) / 64));
+    int virtual_count = 0, tied = 0;
+    for (const auto& [uv, tris, resolution] :
+         {std::tuple{notch_uv, notch.triangles, 17}, std::tuple{notch_uv, notch.triangles, 1},
+          std::tuple{soup_uv, soup, 12},
+          std::tuple{cap_param.uv, cap.triangles, DefaultGridResolution(cap.triangle_count())}}) {
+        const ChartGrid grid = BuildChartGrid(uv, tris, resolution);
+        for (const Vec2f& s : points) {
+            const GridLocation got = grid.Locate(s);
+            if (got.real)
+                continue;
+            ++virtual_count;
+            const PlainNearest want = PlainVirtualScan(grid, s);
+            ASSERT_EQ(got.triangle, want.triangle) << s.x << " " << s.y;
+            for (int k = 0; k < 3; ++k)
+                ASSERT_EQ(std::bit_cast<uint32_t>(got.barycentric[k]),
+                          std::bit_cast<uint32_t>(float(want.b[k])));
+            ASSERT_EQ(std::bit_cast<uint32_t>(got.nearest_uv.x),
+                      std::bit_cast<uint32_t>(float(want.nearest.x)));
+            ASSERT_EQ(std::bit_cast<uint32_t>(got.nearest_uv.y),
+                      std::bit_cast<uint32_t>(float(want.nearest.y)));
+            ASSERT_EQ(std::bit_cast<uint32_t>(got.distance),
+                      std::bit_cast<uint32_t>(float(std::sqrt(want.dist2))));
+            // A tie: another outline triangle as near as the answer.
+            for (uint32_t t : grid.outline_tris)
+                if (t != got.triangle && TriDist2(grid.uv, grid.triangles[t], D(s)) ==
+                                             TriDist2(grid.uv, grid.triangles[got.triangle], D(s))) {
+                    ++tied;
+                    break;
+                }
+        }
+    }
+    EXPECT_GT(virtual_count, 3000);
+    EXPECT_GT(tied, 100);  // ties were met: the lowest index must win them
+}
+
 TEST(ChartGrid, EmptyGrid) {
     const ChartGrid grid = BuildChartGrid({}, {}, 4);
     const GridLocation loc = grid.Locate({0.5f, 0.5f});
@@ -349,7 +484,8 @@ namespace {
 
 TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
     // Random points over the whole square, and points on the chart's edges and vertices
-    // (the tolerance band): InsideTriangle is Locate's answer for real points, none else.
+    // (the tolerance band): InsideTriangle is Locate's answer for real points, none else,
+    // and LocateReal is Locate's whole location (bit for bit) for real points, none else.
     const TriMesh m = GridPatch(33, 5, Cap, [](int i, int j) { return !(i > 10 && j < 8); });
     const ChartParam p = ParameterizeChart(m);
     ASSERT_TRUE(HasUv(p.status)) << p.message;
@@ -367,11 +503,22 @@ TEST(ChartGrid, InsideTriangleAgreesWithLocate) {
         const GridLocation loc = grid.Locate(q);
         const uint32_t inside = grid.InsideTriangle(q);
         EXPECT_EQ(inside, loc.real ? loc.triangle : kNoTriangle) << q.x << " " << q.y;
+        const GridLocation own = grid.LocateReal(q);
+        EXPECT_EQ(own.real, loc.real);
+        if (loc.real) {
+            EXPECT_EQ(own.triangle, loc.triangle);
+            EXPECT_EQ(std::memcmp(&own.barycentric, &loc.barycentric, sizeof loc.barycentric), 0);
+            EXPECT_EQ(std::memcmp(&own.nearest_uv, &loc.nearest_uv, sizeof loc.nearest_uv), 0);
+            EXPECT_EQ(std::bit_cast<uint32_t>(own.distance), std::bit_cast<uint32_t>(loc.distance));
+        } else {
+            EXPECT_EQ(own.triangle, kNoTriangle);
+        }
         real += loc.real;
     }
     EXPECT_GT(real, 5000u);
     EXPECT_LT(real, points.size());
     EXPECT_EQ(ChartGrid{}.InsideTriangle(Vec2f(0.5f, 0.5f)), kNoTriangle);
+    EXPECT_EQ(ChartGrid{}.LocateReal(Vec2f(0.5f, 0.5f)).triangle, kNoTriangle);
 }
 
 TEST(ChartGrid, PointsJustOutsideAnEdgeAreRealWithinTheTolerance) {
