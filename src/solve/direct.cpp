@@ -278,17 +278,23 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     // Probes found in the cache take their E and states from it (AddLights) and their
     // visibility points are never read: they are not moved (no origin rays). Unless a light
     // is known: it is evaluated at every point, found probes too.
+    // The records found are handed to AddLights (one lookup per probe, not two).
     std::vector<uint8_t> found;
+    std::vector<const ProbeCache::Record*> records;
     const bool none_known =
         std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
     if (cache && !with_sky && none_known && probes > 0 && probes < points.size()) {
         found.assign(points.size(), 0);
-        for (size_t q = 0; q < probes; ++q)
-            found[q] = cache->map_.count(keys[q]) ? 1 : 0;
+        records.assign(probes, nullptr);
+        for (size_t q = 0; q < probes; ++q) {
+            auto it = cache->map_.find(keys[q]);
+            if (it != cache->map_.end())
+                records[q] = &it->second, found[q] = 1;
+        }
     }
     const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky, found);
     if (parts & kLights)
-        AddLights(on_surface, out, probes, cache, keys, known, inherited);
+        AddLights(on_surface, out, probes, cache, keys, known, inherited, records);
     if (with_sky)
         AddSky(on_surface, out);
 }
@@ -440,7 +446,8 @@ std::vector<uint8_t> DirectLight::ProbeAgreement(const ProbeCache& cache,
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
                             size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
                             std::span<const uint8_t> known,
-                            std::span<const uint8_t> inherited) const {
+                            std::span<const uint8_t> inherited,
+                            std::span<const ProbeCache::Record* const> looked_up) const {
     const bool coherent = probes > 0 && probes < points.size();
     // AddLights' own buffers, per thread as EvaluateLight's (LightScratch): alive across
     // its EvaluateLight calls.
@@ -455,7 +462,9 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
     std::vector<const ProbeCache::Record*>& found = scratch.found;
     found.assign(coherent ? probes : 0, nullptr);
     std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
-    if (coherent && cache) {
+    if (coherent && cache && !looked_up.empty()) {
+        std::copy(looked_up.begin(), looked_up.end(), found.begin());
+    } else if (coherent && cache) {
         for (size_t q = 0; q < probes; ++q) {
             auto it = cache->map_.find(keys[q]);
             if (it != cache->map_.end())
