@@ -347,23 +347,37 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
                                                    bool lights_only,
                                                    std::span<const uint8_t> skip) const {
     std::vector<ReceiverPoint> out(points.begin(), points.end());
-    std::vector<size_t> which;
+    // The buffers per thread (OnSurface runs per node and pass); each is assigned or cleared
+    // before it is read.
+    struct Scratch {
+        std::vector<size_t> which, moved, still, traced;
+        std::vector<Hit> onto, hits;
+        std::vector<Segment> segs;
+    };
+    static thread_local Scratch scratch;
+    std::vector<size_t>& which = scratch.which;
+    which.clear();
     for (size_t p = 0; p < points.size(); ++p)
         if ((skip.empty() || !skip[p]) && (!lights_only || ReachedByALight(points[p])))
             which.push_back(p);
-    const std::vector<size_t> moved = which;
+    std::vector<size_t>& moved = scratch.moved;
+    moved.assign(which.begin(), which.end());
     // The triangle each point moved onto (its ray's hit; geom_id kNoHit: not moved).
-    std::vector<Hit> onto(points.size());
+    std::vector<Hit>& onto = scratch.onto;
+    onto.assign(points.size(), Hit{});
+    std::vector<Segment>& segs = scratch.segs;
+    std::vector<Hit>& hits = scratch.hits;
     for (float dir : {1.f, -1.f}) {
-        std::vector<Segment> segs(which.size());
+        segs.resize(which.size());
         for (size_t k = 0; k < which.size(); ++k) {
             const Vec3f& o = points[which[k]].vis_point;
             const Vec3f n = points[which[k]].normal * dir;
             segs[k] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, reach_};
         }
-        std::vector<Hit> hits(which.size());
+        hits.assign(which.size(), Hit{});
         TraceHits(vis_, segs, hits, RayKind::kOrigin);
-        std::vector<size_t> still;  // not moved: looked at the other way
+        std::vector<size_t>& still = scratch.still;  // not moved: looked at the other way
+        still.clear();
         for (size_t k = 0; k < which.size(); ++k) {
             const ReceiverPoint& rp = points[which[k]];
             const Hit& h = hits[k];
@@ -375,7 +389,7 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
                 still.push_back(which[k]);
             }
         }
-        which = std::move(still);
+        which.swap(still);
     }
     // The face under each shadow-ray origin: light below its plane is blocked by the
     // surface itself (the path tracer's rule, reference.cpp). The horizon's continuous
@@ -393,10 +407,9 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     // (the same line, from just above) meets that triangle first at 99.6 % of them (pepper):
     // its plane is taken without the ray. The others (not moved, or outline points whose
     // ray starts inside the chart) trace it.
-    std::vector<size_t> traced;
-    std::vector<Segment> segs;
-    traced.reserve(moved.size());
-    segs.reserve(moved.size());
+    std::vector<size_t>& traced = scratch.traced;
+    traced.clear();
+    segs.clear();
     for (size_t p : moved) {
         const ReceiverPoint& rp = out[p];
         if (onto[p].geom_id != kNoHit && !(outline_face_inside_ && rp.outline))
@@ -408,7 +421,7 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
         segs.push_back(Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, 2 * offset_});
         traced.push_back(p);
     }
-    std::vector<Hit> hits(traced.size());
+    hits.assign(traced.size(), Hit{});
     TraceHits(vis_, segs, hits, RayKind::kOrigin);
     for (size_t k = 0; k < traced.size(); ++k)
         onto[traced[k]] = hits[k];
