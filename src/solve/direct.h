@@ -196,8 +196,8 @@ private:
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;
-    std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
-    std::vector<Vec3f> sky_world_;   // sky_dirs_ turned to the sky's up axis
+    std::vector<Vec3f> sky_dirs_;     // uniform directions about +z, stratified in z and azimuth
+    std::vector<Vec3f> sky_world_;    // sky_dirs_ turned to the sky's up axis
     std::vector<Vec3d> sky_world_d_;  // the same in double
     float offset_, reach_, far_;
     bool outline_face_inside_;  // SolverSettings::outline_face_inside
