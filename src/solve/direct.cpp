@@ -4,6 +4,7 @@
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/sky.h"
+#include "solve/thread_scratch.h"
 #include "solve/visibility.h"
 
 #include <algorithm>
@@ -158,7 +159,8 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
                                 std::vector<uint8_t>* grid_out) const {
     const size_t nk = l.classify.size();
     const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
-    static thread_local LightScratch scratch;
+    ThreadScratch<LightScratch> kept;
+    LightScratch& scratch = *kept;
     // 1. Classify each point with a few rays (skip points the light cannot reach).
     SegmentBatch& batch = scratch.batch;
     batch.Clear();
@@ -354,7 +356,8 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
         std::vector<Hit> onto, hits;
         std::vector<Segment> segs;
     };
-    static thread_local Scratch scratch;
+    ThreadScratch<Scratch> kept;
+    Scratch& scratch = *kept;
     std::vector<size_t>& which = scratch.which;
     which.clear();
     for (size_t p = 0; p < points.size(); ++p)
@@ -470,7 +473,8 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
         std::vector<size_t> others, all, uncached;
         std::vector<uint8_t> prior, cls, grid, st;
     };
-    static thread_local Scratch scratch;
+    ThreadScratch<Scratch> kept;
+    Scratch& scratch = *kept;
     // Probes found in the cache, and records for the others (filled light by light).
     std::vector<const ProbeCache::Record*>& found = scratch.found;
     found.assign(coherent ? probes : 0, nullptr);
@@ -585,8 +589,13 @@ void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float>
     if (!prior.empty())
         CHECK_EQ(prior.size(), sky_dirs_.size());
     // The batch and the states per thread (AddSky runs per node: no malloc per call).
-    static thread_local SegmentBatch batch;
-    static thread_local std::vector<uint8_t> state;
+    struct Scratch {
+        SegmentBatch batch;
+        std::vector<uint8_t> state;
+    };
+    ThreadScratch<Scratch> kept;
+    SegmentBatch& batch = kept->batch;
+    std::vector<uint8_t>& state = kept->state;
     batch.Clear();
     const Vec3f up(sky_.up);
     const std::vector<Vec3f>& dirs = sky_world_;

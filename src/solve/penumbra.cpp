@@ -11,6 +11,7 @@
 #include "solve/penumbra_grid.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
+#include "solve/thread_scratch.h"
 
 #include <algorithm>
 #include <cmath>
@@ -537,8 +538,8 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     e->assign(penumbra.size(), Vec3d{});
     if (penumbra.empty())
         return;
-    static thread_local PenumbraScratch scratch;
-    PenumbraPass pass(*this, l, points, penumbra, &scratch);
+    ThreadScratch<PenumbraScratch> scratch;
+    PenumbraPass pass(*this, l, points, penumbra, &*scratch);
     pass.SeedStates(classified, centre_traced, prior);
     pass.Run(e);
     if (states)

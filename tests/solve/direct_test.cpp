@@ -13,6 +13,7 @@
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/sky.h"
+#include "solve/thread_scratch.h"
 #include "solve/visibility.h"
 
 namespace mebake::solve {
@@ -458,6 +459,30 @@ TEST(DirectLight, PerThreadBuffersDoNotCarryOver) {
         EXPECT_EQ(fresh, again) << "probes " << probes;
         EXPECT_GT(*std::max_element(again.begin(), again.end()), 0.f);
     }
+}
+
+
+// The per-thread buffers are reused by calls one after the other, and a call nested on the
+// same thread (a solver task run inside Embree's build of a paged piece) gets its own.
+TEST(ThreadScratch, NestedUseGetsItsOwnBuffers) {
+    struct Buffers {
+        std::vector<int> v;
+    };
+    const Buffers* first = nullptr;
+    {
+        ThreadScratch<Buffers> outer;
+        first = &*outer;
+        outer->v.assign(3, 7);
+        {
+            ThreadScratch<Buffers> nested;
+            EXPECT_NE(&*nested, first);
+            EXPECT_TRUE(nested->v.empty());
+            nested->v.assign(5, 1);
+        }
+        EXPECT_EQ(outer->v, std::vector<int>(3, 7));
+    }
+    ThreadScratch<Buffers> again;
+    EXPECT_EQ(&*again, first);
 }
 
 }  // namespace
