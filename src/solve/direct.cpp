@@ -4,6 +4,7 @@
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/sky.h"
+#include "solve/thread_scratch.h"
 #include "solve/visibility.h"
 
 #include <algorithm>
@@ -27,6 +28,18 @@ void Frame(const Vec3f& n, Vec3f* t, Vec3f* b) {
     *t = Vec3f(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
     *b = Vec3f(c, sign + n.y * n.y * a, -n.y);
 }
+
+// What EvaluateLight allocates, kept per thread across calls (it runs per light and node:
+// its and AddLights' ~20 vectors' malloc and free were ~2 % of pepper's solve). Every
+// vector is assigned or cleared before it is read, so a call computes the same whatever ran
+// before it on that thread.
+struct LightScratch {
+    SegmentBatch batch;
+    std::vector<uint8_t> faces, cls, kind, classified, pen_states;
+    std::vector<std::pair<size_t, size_t>> asked;
+    std::vector<size_t> penumbra;
+    std::vector<Vec3d> pen_e, clip_a, clip_b;
+};
 
 }  // namespace
 
@@ -84,8 +97,18 @@ DirectLight::DirectLight(const Scene& scene, const SolverSettings& settings,
         }
         lights_.push_back(std::move(l));
     }
-    if (sky_.type != Sky::Type::None)
+    if (sky_.type != Sky::Type::None) {
         sky_dirs_ = SkyDirections(settings.sky_directions);
+        // The directions turned to the sky's up axis, in float (the rays') and double (the
+        // sums'), once for all AddSky calls.
+        const Vec3f up(sky_.up);
+        Vec3f t, b;
+        Frame(up, &t, &b);
+        for (const Vec3f& d : sky_dirs_) {
+            sky_world_.push_back(t * d.x + b * d.y + up * d.z);
+            sky_world_d_.push_back(Vec3d(sky_world_.back()));
+        }
+    }
 }
 
 double DirectLight::EmittedPower() const {
@@ -136,10 +159,17 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
                                 std::vector<uint8_t>* grid_out) const {
     const size_t nk = l.classify.size();
     const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
+    ThreadScratch<LightScratch> kept;
+    LightScratch& scratch = *kept;
     // 1. Classify each point with a few rays (skip points the light cannot reach).
-    SegmentBatch batch;
-    std::vector<uint8_t> faces(which.size(), 0), cls(which.size() * nk, 0);
-    std::vector<std::pair<size_t, size_t>> asked;
+    SegmentBatch& batch = scratch.batch;
+    batch.Clear();
+    std::vector<uint8_t>& faces = scratch.faces;
+    std::vector<uint8_t>& cls = scratch.cls;
+    faces.assign(which.size(), 0);
+    cls.assign(which.size() * nk, 0);
+    std::vector<std::pair<size_t, size_t>>& asked = scratch.asked;
+    asked.clear();
     for (size_t q = 0; q < which.size(); ++q) {
         const auto& rp = points[which[q]];
         faces[q] = Faces(l, rp);
@@ -159,9 +189,13 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
     for (size_t r = 0; r < asked.size(); ++r)
         cls[asked[r].first * nk + asked[r].second] = batch.occluded[r] ? 3 : 2;
     enum : uint8_t { kAway, kLit, kUmbra, kPenumbra };
-    std::vector<uint8_t> kind(which.size(), kAway);
-    std::vector<size_t> penumbra;
-    std::vector<uint8_t> classified;  // per penumbra point: occluded[] of its classify rays
+    std::vector<uint8_t>& kind = scratch.kind;
+    kind.assign(which.size(), kAway);
+    std::vector<size_t>& penumbra = scratch.penumbra;
+    penumbra.clear();
+    // Per penumbra point: occluded[] of its classify rays.
+    std::vector<uint8_t>& classified = scratch.classified;
+    classified.clear();
     for (size_t q = 0; q < which.size(); ++q) {
         if (!faces[q])
             continue;
@@ -176,8 +210,8 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
             classified.push_back(cls[q * nk + k] == 3 ? 1 : 0);
     }
     // 2. Penumbra points: adaptive cells of the light (see Penumbra()).
-    std::vector<Vec3d> pen_e;
-    std::vector<uint8_t> pen_states;
+    std::vector<Vec3d>& pen_e = scratch.pen_e;  // assigned by Penumbra
+    std::vector<uint8_t>& pen_states = scratch.pen_states;
     const bool centre_traced = !prior_cls || prior_cls[nk - 1] == 0;
     Penumbra(l, points, penumbra, classified, centre_traced, prior_grid, &pen_e,
              grid_out ? &pen_states : nullptr);
@@ -190,7 +224,10 @@ void DirectLight::EvaluateLight(const Light& l, std::span<const ReceiverPoint> p
         add(penumbra[q], pen_e[q]);
     // 3. Fully lit points: the closed form above the point's horizon.
     const Emission emission = l.two_sided ? Emission::kBoth : Emission::kFront;
-    std::vector<Vec3d> clip_a(2 * l.vertices.size()), clip_b(4 * l.vertices.size());
+    std::vector<Vec3d>& clip_a = scratch.clip_a;
+    std::vector<Vec3d>& clip_b = scratch.clip_b;
+    clip_a.resize(std::max(clip_a.size(), 2 * l.vertices.size()));
+    clip_b.resize(std::max(clip_b.size(), 4 * l.vertices.size()));
     for (size_t q = 0; q < which.size(); ++q) {
         if (kind[q] != kLit)
             continue;
@@ -243,17 +280,23 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     // Probes found in the cache take their E and states from it (AddLights) and their
     // visibility points are never read: they are not moved (no origin rays). Unless a light
     // is known: it is evaluated at every point, found probes too.
+    // The records found are handed to AddLights (one lookup per probe, not two).
     std::vector<uint8_t> found;
+    std::vector<const ProbeCache::Record*> records;
     const bool none_known =
         std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
     if (cache && !with_sky && none_known && probes > 0 && probes < points.size()) {
         found.assign(points.size(), 0);
-        for (size_t q = 0; q < probes; ++q)
-            found[q] = cache->map_.count(keys[q]) ? 1 : 0;
+        records.assign(probes, nullptr);
+        for (size_t q = 0; q < probes; ++q) {
+            auto it = cache->map_.find(keys[q]);
+            if (it != cache->map_.end())
+                records[q] = &it->second, found[q] = 1;
+        }
     }
     const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky, found);
     if (parts & kLights)
-        AddLights(on_surface, out, probes, cache, keys, known, inherited);
+        AddLights(on_surface, out, probes, cache, keys, known, inherited, records);
     if (with_sky)
         AddSky(on_surface, out);
 }
@@ -306,23 +349,38 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
                                                    bool lights_only,
                                                    std::span<const uint8_t> skip) const {
     std::vector<ReceiverPoint> out(points.begin(), points.end());
-    std::vector<size_t> which;
+    // The buffers per thread (OnSurface runs per node and pass); each is assigned or cleared
+    // before it is read.
+    struct Scratch {
+        std::vector<size_t> which, moved, still, traced;
+        std::vector<Hit> onto, hits;
+        std::vector<Segment> segs;
+    };
+    ThreadScratch<Scratch> kept;
+    Scratch& scratch = *kept;
+    std::vector<size_t>& which = scratch.which;
+    which.clear();
     for (size_t p = 0; p < points.size(); ++p)
         if ((skip.empty() || !skip[p]) && (!lights_only || ReachedByALight(points[p])))
             which.push_back(p);
-    const std::vector<size_t> moved = which;
+    std::vector<size_t>& moved = scratch.moved;
+    moved.assign(which.begin(), which.end());
     // The triangle each point moved onto (its ray's hit; geom_id kNoHit: not moved).
-    std::vector<Hit> onto(points.size());
+    std::vector<Hit>& onto = scratch.onto;
+    onto.assign(points.size(), Hit{});
+    std::vector<Segment>& segs = scratch.segs;
+    std::vector<Hit>& hits = scratch.hits;
     for (float dir : {1.f, -1.f}) {
-        std::vector<Segment> segs(which.size());
+        segs.resize(which.size());
         for (size_t k = 0; k < which.size(); ++k) {
             const Vec3f& o = points[which[k]].vis_point;
             const Vec3f n = points[which[k]].normal * dir;
             segs[k] = Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, reach_};
         }
-        std::vector<Hit> hits(which.size());
+        hits.assign(which.size(), Hit{});
         TraceHits(vis_, segs, hits, RayKind::kOrigin);
-        std::vector<size_t> still;  // not moved: looked at the other way
+        std::vector<size_t>& still = scratch.still;  // not moved: looked at the other way
+        still.clear();
         for (size_t k = 0; k < which.size(); ++k) {
             const ReceiverPoint& rp = points[which[k]];
             const Hit& h = hits[k];
@@ -334,7 +392,7 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
                 still.push_back(which[k]);
             }
         }
-        which = std::move(still);
+        which.swap(still);
     }
     // The face under each shadow-ray origin: light below its plane is blocked by the
     // surface itself (the path tracer's rule, reference.cpp). The horizon's continuous
@@ -352,10 +410,9 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
     // (the same line, from just above) meets that triangle first at 99.6 % of them (pepper):
     // its plane is taken without the ray. The others (not moved, or outline points whose
     // ray starts inside the chart) trace it.
-    std::vector<size_t> traced;
-    std::vector<Segment> segs;
-    traced.reserve(moved.size());
-    segs.reserve(moved.size());
+    std::vector<size_t>& traced = scratch.traced;
+    traced.clear();
+    segs.clear();
     for (size_t p : moved) {
         const ReceiverPoint& rp = out[p];
         if (onto[p].geom_id != kNoHit && !(outline_face_inside_ && rp.outline))
@@ -367,7 +424,7 @@ std::vector<ReceiverPoint> DirectLight::OnSurface(std::span<const ReceiverPoint>
         segs.push_back(Segment{o.x, o.y, o.z, 0.f, n.x, n.y, n.z, 2 * offset_});
         traced.push_back(p);
     }
-    std::vector<Hit> hits(traced.size());
+    hits.assign(traced.size(), Hit{});
     TraceHits(vis_, segs, hits, RayKind::kOrigin);
     for (size_t k = 0; k < traced.size(); ++k)
         onto[traced[k]] = hits[k];
@@ -405,12 +462,26 @@ std::vector<uint8_t> DirectLight::ProbeAgreement(const ProbeCache& cache,
 void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<float> out,
                             size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
                             std::span<const uint8_t> known,
-                            std::span<const uint8_t> inherited) const {
+                            std::span<const uint8_t> inherited,
+                            std::span<const ProbeCache::Record* const> looked_up) const {
     const bool coherent = probes > 0 && probes < points.size();
+    // AddLights' own buffers, per thread as EvaluateLight's (LightScratch): alive across
+    // its EvaluateLight calls.
+    struct Scratch {
+        std::vector<const ProbeCache::Record*> found;
+        std::vector<float> probe_e;
+        std::vector<size_t> others, all, uncached;
+        std::vector<uint8_t> prior, cls, grid, st;
+    };
+    ThreadScratch<Scratch> kept;
+    Scratch& scratch = *kept;
     // Probes found in the cache, and records for the others (filled light by light).
-    std::vector<const ProbeCache::Record*> found(coherent ? probes : 0, nullptr);
+    std::vector<const ProbeCache::Record*>& found = scratch.found;
+    found.assign(coherent ? probes : 0, nullptr);
     std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
-    if (coherent && cache) {
+    if (coherent && cache && !looked_up.empty()) {
+        std::copy(looked_up.begin(), looked_up.end(), found.begin());
+    } else if (coherent && cache) {
         for (size_t q = 0; q < probes; ++q) {
             auto it = cache->map_.find(keys[q]);
             if (it != cache->map_.end())
@@ -418,10 +489,11 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
         }
     }
     size_t state_at = 0;  // this light's offset in a record's states
-    std::vector<float> probe_e;
+    std::vector<float>& probe_e = scratch.probe_e;
     // Without probes every point is evaluated on its own; with them, the points after the
     // probes take the probes' agreement as a prior.
-    std::vector<size_t> others(points.size() - (coherent ? probes : 0));
+    std::vector<size_t>& others = scratch.others;
+    others.resize(points.size() - (coherent ? probes : 0));
     std::iota(others.begin(), others.end(), coherent ? probes : 0);
     for (const auto& l : lights_) {
         const size_t li = size_t(&l - lights_.data());
@@ -430,8 +502,10 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
             // records get this light's E and uniform states so the record layout holds.
             const size_t nk = l.classify.size();
             const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
-            const std::vector<uint8_t> prior(nk + nv, known[li]);
-            std::vector<size_t> all(points.size());
+            std::vector<uint8_t>& prior = scratch.prior;
+            prior.assign(nk + nv, known[li]);
+            std::vector<size_t>& all = scratch.all;
+            all.resize(points.size());
             std::iota(all.begin(), all.end(), size_t(0));
             probe_e.assign(out.size(), 0.f);
             EvaluateLight(l, points, all, prior.data(), prior.data() + nk, probe_e, nullptr,
@@ -457,16 +531,19 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
         // on a light vertex's visibility, the other points take it without a ray.
         const size_t nk = l.classify.size();
         const size_t nv = (l.vertices.size() - 2) * size_t(l.grid + 1) * size_t(l.grid + 1);
-        std::vector<size_t> uncached;  // probes not in the cache: traced now
+        std::vector<size_t>& uncached = scratch.uncached;  // probes not in the cache: traced
+        uncached.clear();
         for (size_t q = 0; q < probes; ++q)
             if (!found[q])
                 uncached.push_back(q);
-        std::vector<uint8_t> cls, grid;
+        std::vector<uint8_t>& cls = scratch.cls;  // assigned by EvaluateLight
+        std::vector<uint8_t>& grid = scratch.grid;
         probe_e.assign(out.size(), 0.f);
         const uint8_t* inh = inherited.empty() ? nullptr : &inherited[state_at];
         EvaluateLight(l, points, uncached, inh, inh ? inh + nk : nullptr, probe_e, &cls, &grid);
         // Every probe's states (nk then nv), cached or new; E added to out.
-        std::vector<uint8_t> st(probes * (nk + nv));
+        std::vector<uint8_t>& st = scratch.st;  // every slot written below
+        st.resize(probes * (nk + nv));
         for (size_t q = 0, t = 0; q < probes; ++q) {
             uint8_t* dst = &st[q * (nk + nv)];
             const float* e;
@@ -484,7 +561,8 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
             for (int k = 0; k < 9; ++k)
                 out[q * 9 + size_t(k)] += e[k];
         }
-        std::vector<uint8_t> prior(st.begin(), st.begin() + std::ptrdiff_t(nk + nv));
+        std::vector<uint8_t>& prior = scratch.prior;
+        prior.assign(st.begin(), st.begin() + std::ptrdiff_t(nk + nv));
         for (size_t q = 1; q < probes; ++q)
             for (size_t k = 0; k < nk + nv; ++k)
                 if (st[q * (nk + nv) + k] != prior[k])
@@ -510,16 +588,20 @@ void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float>
                          std::span<const uint8_t> prior, std::vector<uint8_t>* states) const {
     if (!prior.empty())
         CHECK_EQ(prior.size(), sky_dirs_.size());
-    SegmentBatch batch;
+    // The batch and the states per thread (AddSky runs per node: no malloc per call).
+    struct Scratch {
+        SegmentBatch batch;
+        std::vector<uint8_t> state;
+    };
+    ThreadScratch<Scratch> kept;
+    SegmentBatch& batch = kept->batch;
+    std::vector<uint8_t>& state = kept->state;
+    batch.Clear();
     const Vec3f up(sky_.up);
-    Vec3f t, b;
-    Frame(up, &t, &b);
-    std::vector<Vec3f> dirs(sky_dirs_.size());
-    for (size_t k = 0; k < sky_dirs_.size(); ++k)
-        dirs[k] = t * sky_dirs_[k].x + b * sky_dirs_[k].y + up * sky_dirs_[k].z;
+    const std::vector<Vec3f>& dirs = sky_world_;
     // Per point and direction: seen, occluded, below its planes (no ray), or traced.
     constexpr uint8_t kTraced = 3;
-    std::vector<uint8_t> state(points.size() * dirs.size());
+    state.resize(points.size() * dirs.size());  // every entry written below
     for (size_t p = 0; p < points.size(); ++p) {
         const ReceiverPoint& rp = points[p];
         const Vec3f o = rp.vis_point + rp.normal * offset_;
@@ -540,22 +622,20 @@ void DirectLight::AddSky(std::span<const ReceiverPoint> points, std::span<float>
         if (state[i] == kTraced)
             state[i] = batch.occluded[r++] ? 1 : 0;
     if (states)
-        *states = state;
+        states->assign(state.begin(), state.end());
     // Estimator of E = integral of L(w) V w dw with the uniform pdf 1 / (2 pi):
     // sum L w 2 pi / N; the uniform part a: a (closed form above the planes - sum of the
     // occluded directions above them), the overcast's (2/3) Lz cos part by the sum.
     const double scale = 2 * std::numbers::pi / double(sky_dirs_.size());
     const bool overcast = sky_.type == Sky::Type::Overcast;
     const Vec3d uniform = sky_.radiance * (overcast ? 1.0 / 3.0 : 1.0);
-    // Per direction, once for all points: w in double and the overcast's factor per colour
-    // (the same products as per point, so the same bits).
-    std::vector<Vec3d> wd(dirs.size()), cos_part(overcast ? dirs.size() : 0);
-    for (size_t k = 0; k < dirs.size(); ++k) {
-        wd[k] = Vec3d(dirs[k]);
-        if (overcast)
-            for (int c = 0; c < 3; ++c)
-                cos_part[k][c] = sky_.radiance[c] * (2.0 / 3.0) * double(sky_dirs_[k].z) * scale;
-    }
+    // Per direction, once for all points: the overcast's factor per colour (the same
+    // products as per point, so the same bits).
+    const std::vector<Vec3d>& wd = sky_world_d_;
+    std::vector<Vec3d> cos_part(overcast ? dirs.size() : 0);
+    for (size_t k = 0; k < cos_part.size(); ++k)
+        for (int c = 0; c < 3; ++c)
+            cos_part[k][c] = sky_.radiance[c] * (2.0 / 3.0) * double(sky_dirs_[k].z) * scale;
     for (size_t p = 0; p < points.size(); ++p) {
         const ReceiverPoint& rp = points[p];
         const std::array<Vec3d, 3> planes = {Vec3d(up), Vec3d(rp.horizon), Vec3d(rp.face)};

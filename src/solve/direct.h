@@ -165,9 +165,11 @@ private:
                        std::span<const size_t> which, const uint8_t* prior_cls,
                        const uint8_t* prior_grid, std::span<float> out,
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
+    // looked_up (empty, or one per probe): the probes' cache records, found by the caller.
     void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
                    ProbeCache* cache, std::span<const ProbeKey> keys,
-                   std::span<const uint8_t> known, std::span<const uint8_t> inherited) const;
+                   std::span<const uint8_t> known, std::span<const uint8_t> inherited,
+                   std::span<const ProbeCache::Record* const> looked_up = {}) const;
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
@@ -194,7 +196,9 @@ private:
     const VisibilityScene& vis_;
     std::vector<Light> lights_;
     Sky sky_;
-    std::vector<Vec3f> sky_dirs_;  // uniform directions about +z, stratified in z and azimuth
+    std::vector<Vec3f> sky_dirs_;     // uniform directions about +z, stratified in z and azimuth
+    std::vector<Vec3f> sky_world_;    // sky_dirs_ turned to the sky's up axis
+    std::vector<Vec3d> sky_world_d_;  // the same in double
     float offset_, reach_, far_;
     bool outline_face_inside_;  // SolverSettings::outline_face_inside
 };

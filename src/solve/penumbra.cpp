@@ -11,6 +11,7 @@
 #include "solve/penumbra_grid.h"
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
+#include "solve/thread_scratch.h"
 
 #include <algorithm>
 #include <cmath>
@@ -324,13 +325,15 @@ private:
 
     // Level by level: visible uniform cells go to visible (hidden ones and those wholly
     // below the horizon add nothing), mixed cells are split in four down to the finest grid,
-    // the finest mixed cells go to finest.
+    // the finest mixed cells go to finest, with their part from the corners (FinestParts).
     void RefineCells() {
         std::vector<Cell>& cur = s_.cur;
         std::vector<Cell>& next = s_.next;
         s_.finest.clear();
+        s_.part.clear();
         InitialCells(&cur);
-        while (!cur.empty()) {
+        // Every cell of a level has the same side (InitialCells' s, halved by each split).
+        for (int side = g_ / std::min(g_, 2); !cur.empty(); side /= 2) {
             TraceCorners(cur);
             next.clear();
             for (const Cell& c : cur) {
@@ -341,21 +344,20 @@ private:
                         s_.visible.push_back(c);
                     continue;
                 }
-                if (Side(c) <= 1)
+                if (side <= 1) {
                     s_.finest.push_back(c);
-                else
+                    s_.part.push_back(CornerPart(visible, hidden));
+                } else {
                     Split(c, &next);
+                }
             }
             std::swap(cur, next);
         }
     }
 
-    static int Side(const Cell& c) {
-        int side = 0;
-        for (int k = 0; k < 3; ++k)
-            side = std::max({side, std::abs(int(c.a[k]) - int(c.a[(k + 1) % 3])),
-                             std::abs(int(c.b[k]) - int(c.b[(k + 1) % 3]))});
-        return side;
+    // A finest mixed cell's visible part from its corners (FinestParts says why).
+    static float CornerPart(int visible, int hidden) {
+        return visible + hidden == 2 ? 0.5f : visible == 1 ? 0.25f : 0.75f;
     }
 
     // Midpoints of the edges 01, 12, 20; the four children (but those wholly below the
@@ -417,23 +419,19 @@ private:
     // 1/4 - 1/9). An edge parallel to a family of cell rows crosses them all at the same
     // offset, which biases that by up to half a row: at such points each mixed cell gets one
     // ray to a fixed point of an R2 low-discrepancy sequence indexed by the cell (part 0 or 1).
-    // Into s_.part, per finest cell.
+    // In s_.part, per finest cell (RefineCells put CornerPart there; the rays replace it at
+    // aligned points).
     void FinestParts() {
         AlignedPoints();
         const std::vector<Cell>& finest = s_.finest;
         std::vector<float>& part = s_.part;
-        part.assign(finest.size(), 0.0f);
         SegmentBatch& batch = s_.batch;
         batch.Clear();
         s_.traced.clear();
         for (uint32_t k = 0; k < finest.size(); ++k) {
             const Cell& c = finest[k];
-            if (!s_.aligned[c.q]) {
-                int visible, hidden;
-                Corners(c, &visible, &hidden);
-                part[k] = visible + hidden == 2 ? 0.5f : visible == 1 ? 0.25f : 0.75f;
+            if (!s_.aligned[c.q])
                 continue;
-            }
             batch.AddSegment(Origin(c.q), SamplePoint(c));
             s_.traced.push_back(k);
         }
@@ -540,8 +538,8 @@ void DirectLight::Penumbra(const Light& l, std::span<const ReceiverPoint> points
     e->assign(penumbra.size(), Vec3d{});
     if (penumbra.empty())
         return;
-    static thread_local PenumbraScratch scratch;
-    PenumbraPass pass(*this, l, points, penumbra, &scratch);
+    ThreadScratch<PenumbraScratch> scratch;
+    PenumbraPass pass(*this, l, points, penumbra, &*scratch);
     pass.SeedStates(classified, centre_traced, prior);
     pass.Run(e);
     if (states)

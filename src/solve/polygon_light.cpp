@@ -68,15 +68,22 @@ Vec3d LambertSum(const Vec3d* v, int nv, const Vec3d& x) {
 }
 
 int ClipToHalfSpace(const Vec3d* v, int nv, const Vec3d& x, const Vec3d& n, Vec3d* out) {
+    if (nv <= 0)
+        return 0;
     int nc = 0;
+    // Each vertex's side once: an edge's dq is the next edge's dp (the same product).
+    const double d0 = Dot(v[0] - x, n);
+    double dp = d0;
     for (int k = 0; k < nv; ++k) {
         const Vec3d& p = v[k];
-        const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
-        const double dp = Dot(p - x, n), dq = Dot(q - x, n);
+        const bool last = k + 1 == nv;
+        const Vec3d& q = v[last ? 0 : k + 1];
+        const double dq = last ? d0 : Dot(q - x, n);
         if (dp >= 0)
             out[nc++] = p;
         if ((dp >= 0) != (dq >= 0))
             out[nc++] = p + (q - p) * (dp / (dp - dq));
+        dp = dq;
     }
     return nc;
 }

@@ -245,7 +245,7 @@ private:
     // Charts with unshot power of at least chart_stop_fraction x their reflected power.
     std::vector<uint8_t> LaggingCharts(const std::vector<double>& unshot) const;
     float RayOffset(uint32_t chart) const;
-    static Vec3f HorizonNormal(const SolveChart& sc, float u, float v);
+    static Vec3f HorizonNormal(const stream::SurfaceSample& finest);
     // A quadtree node's bounding sphere, from the chart's geometry pyramid (the links' and
     // the bounce refinement's distance test).
     static void NodeSphere(const SolveChart& sc, const QuadNode& node, Vec3f* center,

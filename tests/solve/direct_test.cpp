@@ -8,10 +8,12 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <thread>
 
 #include "solve/polygon_light.h"
 #include "solve/rays.h"
 #include "solve/sky.h"
+#include "solve/thread_scratch.h"
 #include "solve/visibility.h"
 
 namespace mebake::solve {
@@ -425,6 +427,62 @@ TEST(DirectLight, OutlinePointKeepsItsOwnEdgesCut) {
     ASSERT_GT(lit, 0);
     EXPECT_NEAR(s.LightAt(false, true), lit, 1e-3 * lit);  // main's rule: B's plane, lit
     EXPECT_NEAR(s.LightAt(true, true), 0, 1e-9);           // A's own face cuts it
+}
+
+
+// EvaluateLight, AddLights, OnSurface, AddSky and the penumbra keep their buffers per thread
+// (bench/RESULTS.md, issue 13 session 22): the same points give the same bits on a fresh
+// thread as after other, larger evaluations on this one, with and without probes.
+TEST(DirectLight, PerThreadBuffersDoNotCarryOver) {
+    OccluderScene s(256);
+    s.scene.sky.type = Sky::Type::Uniform;
+    s.scene.sky.radiance = {0.3, 0.2, 0.1};
+    s.scene.sky.up = {0, 1, 0};
+    DirectLight direct(s.scene, s.scene.solver, s.vis, 1e-4f, 10);
+    // Points across the penumbra, horizons tilted so that some cut the light.
+    auto row = [](double from, double to, double step, float tilt) {
+        std::vector<ReceiverPoint> pts;
+        for (double x = from; x <= to; x += step) {
+            const Vec3f p(float(x), 0, 0.1f);
+            pts.push_back({p, {0, 1, 0}, p, Normalize(Vec3f(tilt * float(x), 1, 0))});
+        }
+        return pts;
+    };
+    const std::vector<ReceiverPoint> pts = row(0, 1.2, 0.1, 1.5f);
+    for (size_t probes : {size_t(0), size_t(4)}) {
+        std::vector<float> fresh(pts.size() * 9), again(pts.size() * 9);
+        std::thread([&] { direct.Evaluate(pts, fresh, DirectLight::kAll, probes); }).join();
+        const std::vector<ReceiverPoint> other = row(-1, 2.5, 0.03, -0.7f);
+        std::vector<float> e_other(other.size() * 9);
+        direct.Evaluate(other, e_other, DirectLight::kAll, probes);
+        direct.Evaluate(pts, again, DirectLight::kAll, probes);
+        EXPECT_EQ(fresh, again) << "probes " << probes;
+        EXPECT_GT(*std::max_element(again.begin(), again.end()), 0.f);
+    }
+}
+
+
+// The per-thread buffers are reused by calls one after the other, and a call nested on the
+// same thread (a solver task run inside Embree's build of a paged piece) gets its own.
+TEST(ThreadScratch, NestedUseGetsItsOwnBuffers) {
+    struct Buffers {
+        std::vector<int> v;
+    };
+    const Buffers* first = nullptr;
+    {
+        ThreadScratch<Buffers> outer;
+        first = &*outer;
+        outer->v.assign(3, 7);
+        {
+            ThreadScratch<Buffers> nested;
+            EXPECT_NE(&*nested, first);
+            EXPECT_TRUE(nested->v.empty());
+            nested->v.assign(5, 1);
+        }
+        EXPECT_EQ(outer->v, std::vector<int>(3, 7));
+    }
+    ThreadScratch<Buffers> again;
+    EXPECT_EQ(&*again, first);
 }
 
 }  // namespace

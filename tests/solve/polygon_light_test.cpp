@@ -362,5 +362,43 @@ TEST(PolygonLight, BackSideAndPlaneAndEdges) {
               0.0);
 }
 
+
+// ClipToHalfSpace takes each vertex's side once (an edge's dq is the next edge's dp): the
+// same vertices to the bit as the per-edge form it replaced, on random polygons and planes.
+TEST(PolygonLight, ClipToHalfSpaceMatchesThePerEdgeForm) {
+    auto per_edge = [](const Vec3d* v, int nv, const Vec3d& x, const Vec3d& n, Vec3d* out) {
+        int nc = 0;
+        for (int k = 0; k < nv; ++k) {
+            const Vec3d& p = v[k];
+            const Vec3d& q = v[k + 1 == nv ? 0 : k + 1];
+            const double dp = Dot(p - x, n), dq = Dot(q - x, n);
+            if (dp >= 0) out[nc++] = p;
+            if ((dp >= 0) != (dq >= 0)) out[nc++] = p + (q - p) * (dp / (dp - dq));
+        }
+        return nc;
+    };
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int clipped = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const int nv = 3 + trial % 6;
+        std::vector<Vec3d> poly(static_cast<size_t>(nv));
+        for (auto& p : poly) p = {u(rng), u(rng), u(rng)};
+        const Vec3d x{u(rng) * 0.5, u(rng) * 0.5, u(rng) * 0.5}, n{u(rng), u(rng), u(rng)};
+        std::vector<Vec3d> want(2 * size_t(nv)), got(2 * size_t(nv));
+        const int nw = per_edge(poly.data(), nv, x, n, want.data());
+        const int ng = ClipToHalfSpace(poly.data(), nv, x, n, got.data());
+        ASSERT_EQ(ng, nw) << "trial " << trial;
+        for (int k = 0; k < ng; ++k)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_EQ(got[size_t(k)][c], want[size_t(k)][c]) << "trial " << trial;
+        int above = 0;
+        for (const Vec3d& p : poly) above += Dot(p - x, n) >= 0;
+        clipped += above > 0 && above < nv;
+    }
+    EXPECT_GT(clipped, 500);  // the planes cut most polygons
+    EXPECT_EQ(ClipToHalfSpace(nullptr, 0, {}, {0, 0, 1}, nullptr), 0);
+}
+
 }  // namespace
 }  // namespace mebake::solve
