@@ -219,7 +219,6 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     auto sample_level = [&](int l, std::vector<Emitter::Texel>* out) {
         const uint32_t m = 1u << l;
         out->resize(size_t(m) * m);
-        float val[9];
         for (uint32_t j = 0; j < m; ++j) {
             for (uint32_t i = 0; i < m; ++i) {
                 const auto& g = sc.geometry.At(l, i, j);
@@ -239,14 +238,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 }
                 if (g.area <= 0)
                     continue;
-                TexelMean(field, true, i, j, m, val);
-                const Material& mat = scene_.MaterialOf(g.material);
-                t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                      opt_.settings.radiosity);
-                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-                if (first_shot && emissive_[chart])
-                    for (int c = 0; c < 3; ++c)
-                        t.db[c] += float(std::numbers::pi) * mat.emission[c];
+                t.db = SampleUnshot(chart, field, g, i, j, m, first_shot);
                 t.db_max = Luminance(t.db);
             }
         }
@@ -352,12 +344,39 @@ void Solver::Emitter::FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4],
     }
 }
 
+Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field,
+                           const stream::GeometryTexel& g, uint32_t i, uint32_t j, uint32_t n,
+                           bool first_shot) const {
+    float val[9];
+    TexelMean(field, true, i, j, n, val);
+    Vec3f db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color), opt_.settings.radiosity);
+    // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+    if (first_shot && emissive_[chart]) {
+        const Material& mat = scene_.MaterialOf(g.material);
+        for (int c = 0; c < 3; ++c)
+            db[c] += float(std::numbers::pi) * mat.emission[c];
+    }
+    return db;
+}
+
 double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
-    Emitter e;
-    BuildEmitter(chart, first_shot, &e);
+    // BuildEmitter's finest samples alone, in its order: building the whole emitter (its
+    // coarser levels, facets and the near samples, four times the finest) for this sum was
+    // 4.8 % of pepper's bounce pass.
+    const SolveChart& sc = charts_[chart];
+    const GeometryPin pin = sc.geometry.Pin();
+    const ChartField& field = fields_[chart];
+    const RegionPin field_pin = field.Pin();
+    const int top = EmitterTop(sc);
+    const uint32_t n = 1u << top;
     double p = 0;
-    for (const auto& t : e.levels.back())
-        p += double(Luminance(t.db)) * t.area;
+    for (uint32_t j = 0; j < n; ++j)
+        for (uint32_t i = 0; i < n; ++i) {
+            const auto& g = sc.geometry.At(top, i, j);
+            const Vec3f db = g.area > 0 ? SampleUnshot(chart, field, g, i, j, n, first_shot)
+                                        : Vec3f{};
+            p += double(Luminance(db)) * g.area;
+        }
     return p;
 }
 
