@@ -973,6 +973,22 @@ private:
         return region;
     }
 
+    // A sample CollectPairs may pair, with what its pair loop reads of it.
+    struct RegionTexel {
+        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
+        Vec3d pos, nrm;    // src's in double
+        TexelSource src;
+        FacetSpread spread;
+    };
+    // What CollectPairs' pairs share: the emitter level sampled, its row, the side of its
+    // samples, whether they stand for facets, whether near pairs take their children.
+    struct PairLevel {
+        int ls;
+        uint32_t row;
+        double texel_side;
+        bool faceted, near;
+    };
+
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h), appended to pairs_ (its ray's end in Pair::carrier). A
     // sample's facets are read only for the pairs where they may not all face the receiver
@@ -982,62 +998,78 @@ private:
         const auto& texels = em.levels[size_t(ls)];
         const int top = int(em.levels.size()) - 1;
         const bool faceted = ls < top || !em.facets.empty();
-        const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        const double texel_side = emitter_scale / double(row);
+        const PairLevel pl{ls, row, em.scale / double(row), faceted,
+                           ls == top && !em.near.empty()};  // near: NearPairs
+        const double near_r2 =
+            std::pow(s_.opt_.settings.near_emitter_split * pl.texel_side, 2);
         // A region of one sample is tested as fast pair by pair (most links at the finest
         // level).
         const bool cull = span > 1;
         const RegionBound region = cull ? PairRegion(em, lk, ls, faceted) : RegionBound{};
-        // Near pairs of the finest samples take their children (NearPairs).
-        const bool near = ls == top && !em.near.empty();
-        const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * texel_side, 2);
-        // The region's samples that can emit, in pair order, their centre and normal in
-        // double once per link instead of once per pair (GeometryOf's arithmetic).
+        // The region's samples that can emit, in pair order, with what the pair loop reads
+        // of them (their centre and normal in double once per link, as GeometryOf's), so
+        // that it does not read the 100-byte Emitter::Texel per pair.
         region_texels_.clear();
         for (uint32_t b = 0; b < span; ++b)
             for (uint32_t a = 0; a < span; ++a) {
                 const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
                 const auto& t = texels[k];
                 if (t.area > 0 && t.db_max > 0)
-                    region_texels_.push_back({i, j, k, Vec3d(t.pos), Vec3d(t.nrm)});
+                    region_texels_.push_back(
+                        {i, j, k, Vec3d(t.pos), Vec3d(t.nrm), {t.pos, t.nrm, t.area}, t.spread});
             }
-        for (uint32_t p = 0; p < pts_.size(); ++p) {
-            const ReceiverPoint& rp = pts_[p];
-            if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
-                         RegionFacesAway(rp.position, region)))
-                continue;  // every pair's horizon or facing test would fail
-            const Vec3d x(rp.position);
-            for (const RegionTexel& rt : region_texels_) {
-                const uint32_t i = rt.i, j = rt.j, k = rt.k;
-                const auto& t = texels[k];
-                const TexelSource src{t.pos, t.nrm, t.area};
-                const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, src), to the bit
-                const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
-                if (near && g.r2 < near_r2) {
-                    NearPairs(em, p, i, j, row, texel_side);
-                    continue;
-                }
-                // Below the point's horizon (a third of the pairs tested): TexelTransfer
-                // fails, and so does FacetedTransfer unless a facet may rise above it
-                // (BelowHorizon), so the facets' test is not needed to know it.
-                if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
-                    (!faceted || BelowHorizon(g, rp.normal, t.spread)))
-                    continue;
-                Vec3d contrib;
-                int carrier = -1;
-                if (!faceted || FacetsAgree(g, t.spread)) {
-                    if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
-                        continue;
-                } else {
-                    em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
-                    if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
-                                         &contrib, &carrier))
-                        continue;
-                }
-                pairs_.push_back({p, k, Vec3f(contrib), int8_t(carrier)});
-            }
+        if (region_texels_.size() == 1) {  // most links: the sample's data stays in registers
+            const RegionTexel& rt = region_texels_[0];
+            for (uint32_t p = 0; p < pts_.size(); ++p)
+                if (!cull || !RegionHidden(pts_[p], region))
+                    TryPair(em, pl, near_r2, p, Vec3d(pts_[p].position), rt);
+            return;
         }
+        for (uint32_t p = 0; p < pts_.size(); ++p) {
+            if (cull && RegionHidden(pts_[p], region))
+                continue;  // every pair's horizon or facing test would fail
+            const Vec3d x(pts_[p].position);
+            for (const RegionTexel& rt : region_texels_)
+                TryPair(em, pl, near_r2, p, x, rt);
+        }
+    }
+
+    static bool RegionHidden(const ReceiverPoint& rp, const RegionBound& region) {
+        return RegionBelowHorizon(rp.position, rp.normal, region) ||
+               RegionFacesAway(rp.position, region);
+    }
+
+    // Pair (receiver point p at x, sample rt) of CollectPairs, appended to pairs_ when it
+    // can carry light. Inlined in both of CollectPairs' loops (a call per pair cost 5 %).
+    [[gnu::always_inline]] void TryPair(const Emitter& em, const PairLevel& pl,
+                                        double near_r2, uint32_t p, const Vec3d& x,
+                                        const RegionTexel& rt) {
+        const ReceiverPoint& rp = pts_[p];
+        const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, rt.src), to the bit
+        const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
+        if (pl.near && g.r2 < near_r2) {
+            NearPairs(em, p, rt.i, rt.j, pl.row, pl.texel_side);
+            return;
+        }
+        // Below the point's horizon (a third of the pairs tested): TexelTransfer fails, and
+        // so does FacetedTransfer unless a facet may rise above it (BelowHorizon), so the
+        // facets' test is not needed to know it.
+        if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
+            (!pl.faceted || BelowHorizon(g, rp.normal, rt.spread)))
+            return;
+        Vec3d contrib;
+        int carrier = -1;
+        if (!pl.faceted || FacetsAgree(g, rt.spread)) {
+            if (!TexelTransfer(rp.position, rp.normal, rt.src, g, pl.texel_side, &contrib))
+                return;
+        } else {
+            em.FacetsOf(pl.ls, rt.i, rt.j, facets_.data(), facet_vis_.data());
+            if (!FacetedTransfer(rp.position, rp.normal, rt.src, g, facets_, pl.texel_side,
+                                 &contrib, &carrier))
+                return;
+        }
+        pairs_.push_back({p, rt.k, Vec3f(contrib), int8_t(carrier)});
     }
 
     // Hierarchical radiosity's refinement of the emitter side alone, for a receiver point p
@@ -1110,10 +1142,6 @@ private:
         Vec3f pos, nrm;
     };
     std::vector<SplitTexel> split_texels_;  // SplitVisibility's samples that can emit
-    struct RegionTexel {
-        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
-        Vec3d pos, nrm;
-    };
     std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
