@@ -344,9 +344,8 @@ void Solver::Emitter::FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4],
     }
 }
 
-Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field,
-                           const stream::GeometryTexel& g, uint32_t i, uint32_t j, uint32_t n,
-                           bool first_shot) const {
+Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field, const stream::GeometryTexel& g,
+                           uint32_t i, uint32_t j, uint32_t n, bool first_shot) const {
     float val[9];
     TexelMean(field, true, i, j, n, val);
     Vec3f db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color), opt_.settings.radiosity);
@@ -373,8 +372,8 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
     for (uint32_t j = 0; j < n; ++j)
         for (uint32_t i = 0; i < n; ++i) {
             const auto& g = sc.geometry.At(top, i, j);
-            const Vec3f db = g.area > 0 ? SampleUnshot(chart, field, g, i, j, n, first_shot)
-                                        : Vec3f{};
+            const Vec3f db =
+                g.area > 0 ? SampleUnshot(chart, field, g, i, j, n, first_shot) : Vec3f{};
             p += double(Luminance(db)) * g.area;
         }
     return p;
@@ -1001,8 +1000,7 @@ private:
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
         const PairLevel pl{ls, row, em.scale / double(row), faceted,
                            ls == top && !em.near.empty()};  // near: NearPairs
-        const double near_r2 =
-            std::pow(s_.opt_.settings.near_emitter_split * pl.texel_side, 2);
+        const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * pl.texel_side, 2);
         // A region of one sample is tested as fast pair by pair (most links at the finest
         // level).
         const bool cull = span > 1;
@@ -1042,9 +1040,8 @@ private:
 
     // Pair (receiver point p at x, sample rt) of CollectPairs, appended to pairs_ when it
     // can carry light. Inlined in both of CollectPairs' loops (a call per pair cost 5 %).
-    [[gnu::always_inline]] void TryPair(const Emitter& em, const PairLevel& pl,
-                                        double near_r2, uint32_t p, const Vec3d& x,
-                                        const RegionTexel& rt) {
+    [[gnu::always_inline]] void TryPair(const Emitter& em, const PairLevel& pl, double near_r2,
+                                        uint32_t p, const Vec3d& x, const RegionTexel& rt) {
         const ReceiverPoint& rp = pts_[p];
         const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, rt.src), to the bit
         const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
@@ -1141,7 +1138,7 @@ private:
         uint32_t k;  // the sample's index in its level
         Vec3f pos, nrm;
     };
-    std::vector<SplitTexel> split_texels_;  // SplitVisibility's samples that can emit
+    std::vector<SplitTexel> split_texels_;    // SplitVisibility's samples that can emit
     std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
