@@ -978,6 +978,7 @@ private:
         Vec3d pos, nrm;    // src's in double
         TexelSource src;
         FacetSpread spread;
+        int32_t facets = -1;  // its facets in region_facets_ once read (SampleFacets), or -1
     };
     // What CollectPairs' pairs share: the emitter level sampled, its row, the side of its
     // samples, whether they stand for facets, whether near pairs take their children.
@@ -1009,6 +1010,7 @@ private:
         // of them (their centre and normal in double once per link, as GeometryOf's), so
         // that it does not read the 100-byte Emitter::Texel per pair.
         region_texels_.clear();
+        region_facets_.clear();
         for (uint32_t b = 0; b < span; ++b)
             for (uint32_t a = 0; a < span; ++a) {
                 const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
@@ -1018,7 +1020,7 @@ private:
                         {i, j, k, Vec3d(t.pos), Vec3d(t.nrm), {t.pos, t.nrm, t.area}, t.spread});
             }
         if (region_texels_.size() == 1) {  // most links: the sample's data stays in registers
-            const RegionTexel& rt = region_texels_[0];
+            RegionTexel& rt = region_texels_[0];
             for (uint32_t p = 0; p < pts_.size(); ++p)
                 if (!cull || !RegionHidden(pts_[p], region))
                     TryPair(em, pl, near_r2, p, Vec3d(pts_[p].position), rt);
@@ -1028,7 +1030,7 @@ private:
             if (cull && RegionHidden(pts_[p], region))
                 continue;  // every pair's horizon or facing test would fail
             const Vec3d x(pts_[p].position);
-            for (const RegionTexel& rt : region_texels_)
+            for (RegionTexel& rt : region_texels_)
                 TryPair(em, pl, near_r2, p, x, rt);
         }
     }
@@ -1041,7 +1043,7 @@ private:
     // Pair (receiver point p at x, sample rt) of CollectPairs, appended to pairs_ when it
     // can carry light. Inlined in both of CollectPairs' loops (a call per pair cost 5 %).
     [[gnu::always_inline]] void TryPair(const Emitter& em, const PairLevel& pl, double near_r2,
-                                        uint32_t p, const Vec3d& x, const RegionTexel& rt) {
+                                        uint32_t p, const Vec3d& x, RegionTexel& rt) {
         const ReceiverPoint& rp = pts_[p];
         const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, rt.src), to the bit
         const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
@@ -1061,12 +1063,22 @@ private:
             if (!TexelTransfer(rp.position, rp.normal, rt.src, g, pl.texel_side, &contrib))
                 return;
         } else {
-            em.FacetsOf(pl.ls, rt.i, rt.j, facets_.data(), facet_vis_.data());
-            if (!FacetedTransfer(rp.position, rp.normal, rt.src, g, facets_, pl.texel_side,
-                                 &contrib, &carrier))
+            if (!FacetedTransfer(rp.position, rp.normal, rt.src, g, SampleFacets(em, pl.ls, rt),
+                                 pl.texel_side, &contrib, &carrier))
                 return;
         }
         pairs_.push_back({p, rt.k, Vec3f(contrib), int8_t(carrier)});
+    }
+
+    // Sample rt's facets (Emitter::FacetsOf), read once per link: each of the node's
+    // points may ask for them (reading them per pair was 1.7 % of pepper's bounce pass).
+    std::span<const TexelSource> SampleFacets(const Emitter& em, int ls, RegionTexel& rt) {
+        if (rt.facets < 0) {
+            rt.facets = int32_t(region_facets_.size());
+            region_facets_.resize(region_facets_.size() + 4);
+            em.FacetsOf(ls, rt.i, rt.j, &region_facets_[size_t(rt.facets)], facet_vis_.data());
+        }
+        return {&region_facets_[size_t(rt.facets)], 4};
     }
 
     // Hierarchical radiosity's refinement of the emitter side alone, for a receiver point p
@@ -1140,6 +1152,7 @@ private:
     };
     std::vector<SplitTexel> split_texels_;    // SplitVisibility's samples that can emit
     std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
+    std::vector<TexelSource> region_facets_;  // and their facets read (SampleFacets)
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1
