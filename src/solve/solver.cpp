@@ -221,7 +221,6 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
     auto sample_level = [&](int l, std::vector<Emitter::Texel>* out) {
         const uint32_t m = 1u << l;
         out->resize(size_t(m) * m);
-        float val[9];
         for (uint32_t j = 0; j < m; ++j) {
             for (uint32_t i = 0; i < m; ++i) {
                 const auto& g = sc.geometry.At(l, i, j);
@@ -241,14 +240,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 }
                 if (g.area <= 0)
                     continue;
-                TexelMean(field, true, i, j, m, val);
-                const Material& mat = scene_.MaterialOf(g.material);
-                t.db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                      opt_.settings.radiosity);
-                // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-                if (first_shot && emissive_[chart])
-                    for (int c = 0; c < 3; ++c)
-                        t.db[c] += float(std::numbers::pi) * mat.emission[c];
+                t.db = SampleUnshot(chart, field, g, i, j, m, first_shot);
                 t.db_max = Luminance(t.db);
             }
         }
@@ -354,12 +346,38 @@ void Solver::Emitter::FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4],
     }
 }
 
+Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field, const stream::GeometryTexel& g,
+                           uint32_t i, uint32_t j, uint32_t n, bool first_shot) const {
+    float val[9];
+    TexelMean(field, true, i, j, n, val);
+    Vec3f db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color), opt_.settings.radiosity);
+    // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
+    if (first_shot && emissive_[chart]) {
+        const Material& mat = scene_.MaterialOf(g.material);
+        for (int c = 0; c < 3; ++c)
+            db[c] += float(std::numbers::pi) * mat.emission[c];
+    }
+    return db;
+}
+
 double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
-    Emitter e;
-    BuildEmitter(chart, first_shot, &e);
+    // BuildEmitter's finest samples alone, in its order: building the whole emitter (its
+    // coarser levels, facets and the near samples, four times the finest) for this sum was
+    // 4.8 % of pepper's bounce pass.
+    const SolveChart& sc = charts_[chart];
+    const GeometryPin pin = sc.geometry.Pin();
+    const ChartField& field = fields_[chart];
+    const RegionPin field_pin = field.Pin();
+    const int top = EmitterTop(sc);
+    const uint32_t n = 1u << top;
     double p = 0;
-    for (const auto& t : e.levels.back())
-        p += double(Luminance(t.db)) * t.area;
+    for (uint32_t j = 0; j < n; ++j)
+        for (uint32_t i = 0; i < n; ++i) {
+            const auto& g = sc.geometry.At(top, i, j);
+            const Vec3f db =
+                g.area > 0 ? SampleUnshot(chart, field, g, i, j, n, first_shot) : Vec3f{};
+            p += double(Luminance(db)) * g.area;
+        }
     return p;
 }
 
@@ -956,6 +974,23 @@ private:
         return region;
     }
 
+    // A sample CollectPairs may pair, with what its pair loop reads of it.
+    struct RegionTexel {
+        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
+        Vec3d pos, nrm;    // src's in double
+        TexelSource src;
+        FacetSpread spread;
+        int32_t facets = -1;  // its facets in region_facets_ once read (SampleFacets), or -1
+    };
+    // What CollectPairs' pairs share: the emitter level sampled, its row, the side of its
+    // samples, whether they stand for facets, whether near pairs take their children.
+    struct PairLevel {
+        int ls;
+        uint32_t row;
+        double texel_side;
+        bool faceted, near;
+    };
+
     // Every (Gauss point, texel of the region) pair that can carry light, with its
     // transfer (transfer.h), appended to pairs_ (its ray's end in Pair::carrier). A
     // sample's facets are read only for the pairs where they may not all face the receiver
@@ -965,62 +1000,87 @@ private:
         const auto& texels = em.levels[size_t(ls)];
         const int top = int(em.levels.size()) - 1;
         const bool faceted = ls < top || !em.facets.empty();
-        const double emitter_scale = em.scale;
         const uint32_t span = 1u << (ls - lk.level), row = 1u << ls;
-        const double texel_side = emitter_scale / double(row);
+        const PairLevel pl{ls, row, em.scale / double(row), faceted,
+                           ls == top && !em.near.empty()};  // near: NearPairs
+        const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * pl.texel_side, 2);
         // A region of one sample is tested as fast pair by pair (most links at the finest
         // level).
         const bool cull = span > 1;
         const RegionBound region = cull ? PairRegion(em, lk, ls, faceted) : RegionBound{};
-        // Near pairs of the finest samples take their children (NearPairs).
-        const bool near = ls == top && !em.near.empty();
-        const double near_r2 = std::pow(s_.opt_.settings.near_emitter_split * texel_side, 2);
-        // The region's samples that can emit, in pair order, their centre and normal in
-        // double once per link instead of once per pair (GeometryOf's arithmetic).
+        // The region's samples that can emit, in pair order, with what the pair loop reads
+        // of them (their centre and normal in double once per link, as GeometryOf's), so
+        // that it does not read the 100-byte Emitter::Texel per pair.
         region_texels_.clear();
+        region_facets_.clear();
         for (uint32_t b = 0; b < span; ++b)
             for (uint32_t a = 0; a < span; ++a) {
                 const uint32_t i = lk.i * span + a, j = lk.j * span + b, k = j * row + i;
                 const auto& t = texels[k];
                 if (t.area > 0 && t.db_max > 0)
-                    region_texels_.push_back({i, j, k, Vec3d(t.pos), Vec3d(t.nrm)});
+                    region_texels_.push_back(
+                        {i, j, k, Vec3d(t.pos), Vec3d(t.nrm), {t.pos, t.nrm, t.area}, t.spread});
             }
-        for (uint32_t p = 0; p < pts_.size(); ++p) {
-            const ReceiverPoint& rp = pts_[p];
-            if (cull && (RegionBelowHorizon(rp.position, rp.normal, region) ||
-                         RegionFacesAway(rp.position, region)))
-                continue;  // every pair's horizon or facing test would fail
-            const Vec3d x(rp.position);
-            for (const RegionTexel& rt : region_texels_) {
-                const uint32_t i = rt.i, j = rt.j, k = rt.k;
-                const auto& t = texels[k];
-                const TexelSource src{t.pos, t.nrm, t.area};
-                const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, src), to the bit
-                const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
-                if (near && g.r2 < near_r2) {
-                    NearPairs(em, p, i, j, row, texel_side);
-                    continue;
-                }
-                // Below the point's horizon (a third of the pairs tested): TexelTransfer
-                // fails, and so does FacetedTransfer unless a facet may rise above it
-                // (BelowHorizon), so the facets' test is not needed to know it.
-                if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
-                    (!faceted || BelowHorizon(g, rp.normal, t.spread)))
-                    continue;
-                Vec3d contrib;
-                int carrier = -1;
-                if (!faceted || FacetsAgree(g, t.spread)) {
-                    if (!TexelTransfer(rp.position, rp.normal, src, g, texel_side, &contrib))
-                        continue;
-                } else {
-                    em.FacetsOf(ls, i, j, facets_.data(), facet_vis_.data());
-                    if (!FacetedTransfer(rp.position, rp.normal, src, g, facets_, texel_side,
-                                         &contrib, &carrier))
-                        continue;
-                }
-                pairs_.push_back({p, k, Vec3f(contrib), int8_t(carrier)});
-            }
+        if (region_texels_.size() == 1) {  // most links: the sample's data stays in registers
+            RegionTexel& rt = region_texels_[0];
+            for (uint32_t p = 0; p < pts_.size(); ++p)
+                if (!cull || !RegionHidden(pts_[p], region))
+                    TryPair(em, pl, near_r2, p, Vec3d(pts_[p].position), rt);
+            return;
         }
+        for (uint32_t p = 0; p < pts_.size(); ++p) {
+            if (cull && RegionHidden(pts_[p], region))
+                continue;  // every pair's horizon or facing test would fail
+            const Vec3d x(pts_[p].position);
+            for (RegionTexel& rt : region_texels_)
+                TryPair(em, pl, near_r2, p, x, rt);
+        }
+    }
+
+    static bool RegionHidden(const ReceiverPoint& rp, const RegionBound& region) {
+        return RegionBelowHorizon(rp.position, rp.normal, region) ||
+               RegionFacesAway(rp.position, region);
+    }
+
+    // Pair (receiver point p at x, sample rt) of CollectPairs, appended to pairs_ when it
+    // can carry light. Inlined in both of CollectPairs' loops (a call per pair cost 5 %).
+    [[gnu::always_inline]] void TryPair(const Emitter& em, const PairLevel& pl, double near_r2,
+                                        uint32_t p, const Vec3d& x, RegionTexel& rt) {
+        const ReceiverPoint& rp = pts_[p];
+        const Vec3d d = rt.pos - x;  // GeometryOf(rp.position, rt.src), to the bit
+        const PairGeometry g{d, Dot(d, d), -Dot(d, rt.nrm)};
+        if (pl.near && g.r2 < near_r2) {
+            NearPairs(em, p, rt.i, rt.j, pl.row, pl.texel_side);
+            return;
+        }
+        // Below the point's horizon (a third of the pairs tested): TexelTransfer fails, and
+        // so does FacetedTransfer unless a facet may rise above it (BelowHorizon), so the
+        // facets' test is not needed to know it.
+        if (Dot(g.d, Vec3d(rp.normal)) <= 0 &&
+            (!pl.faceted || BelowHorizon(g, rp.normal, rt.spread)))
+            return;
+        Vec3d contrib;
+        int carrier = -1;
+        if (!pl.faceted || FacetsAgree(g, rt.spread)) {
+            if (!TexelTransfer(rp.position, rp.normal, rt.src, g, pl.texel_side, &contrib))
+                return;
+        } else {
+            if (!FacetedTransfer(rp.position, rp.normal, rt.src, g, SampleFacets(em, pl.ls, rt),
+                                 pl.texel_side, &contrib, &carrier))
+                return;
+        }
+        pairs_.push_back({p, rt.k, Vec3f(contrib), int8_t(carrier)});
+    }
+
+    // Sample rt's facets (Emitter::FacetsOf), read once per link: each of the node's
+    // points may ask for them (reading them per pair was 1.7 % of pepper's bounce pass).
+    std::span<const TexelSource> SampleFacets(const Emitter& em, int ls, RegionTexel& rt) {
+        if (rt.facets < 0) {
+            rt.facets = int32_t(region_facets_.size());
+            region_facets_.resize(region_facets_.size() + 4);
+            em.FacetsOf(ls, rt.i, rt.j, &region_facets_[size_t(rt.facets)], facet_vis_.data());
+        }
+        return {&region_facets_[size_t(rt.facets)], 4};
     }
 
     // Hierarchical radiosity's refinement of the emitter side alone, for a receiver point p
@@ -1092,12 +1152,9 @@ private:
         uint32_t k;  // the sample's index in its level
         Vec3f pos, nrm;
     };
-    std::vector<SplitTexel> split_texels_;  // SplitVisibility's samples that can emit
-    struct RegionTexel {
-        uint32_t i, j, k;  // the sample (i, j), k = j x row + i
-        Vec3d pos, nrm;
-    };
+    std::vector<SplitTexel> split_texels_;    // SplitVisibility's samples that can emit
     std::vector<RegionTexel> region_texels_;  // CollectPairs' samples of its link
+    std::vector<TexelSource> region_facets_;  // and their facets read (SampleFacets)
     static constexpr size_t kMaxSlots = 4096;  // x 81 floats at M2: 1.3 MB
     const size_t values_per_node_;             // ng^2 points x the field's blocks
     std::vector<int32_t> node_slot_;           // per node: its slot, or -1

@@ -238,6 +238,10 @@ private:
     // refine_indirect.cpp: leaves split for the first bounce before the gather starts.
     void RefineForBounces(uint32_t chart, int max_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
+    // The unshot radiosity (and emission on the first shot) of sample (i, j) of an n x n
+    // level whose geometry texel is g (area > 0): an emitter's finest samples.
+    Vec3f SampleUnshot(uint32_t chart, const ChartField& field, const stream::GeometryTexel& g,
+                       uint32_t i, uint32_t j, uint32_t n, bool first_shot) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
                 const std::vector<std::vector<float>>& links);
     double UnshotPower(uint32_t chart, bool first_shot) const;
