@@ -240,7 +240,7 @@ void Solver::BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const {
                 }
                 if (g.area <= 0)
                     continue;
-                t.db = SampleUnshot(chart, field, g, i, j, m, first_shot);
+                t.db = SampleRadiosity(chart, field, g, i, j, m, true, first_shot);
                 t.db_max = Luminance(t.db);
             }
         }
@@ -346,13 +346,14 @@ void Solver::Emitter::FacetsOf(int l, uint32_t i, uint32_t j, TexelSource f[4],
     }
 }
 
-Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field, const stream::GeometryTexel& g,
-                           uint32_t i, uint32_t j, uint32_t n, bool first_shot) const {
+Vec3f Solver::SampleRadiosity(uint32_t chart, const ChartField& field,
+                              const stream::GeometryTexel& g, uint32_t i, uint32_t j, uint32_t n,
+                              bool unshot, bool emission) const {
     float val[9];
-    TexelMean(field, true, i, j, n, val);
+    TexelMean(field, unshot, i, j, n, val);
     Vec3f db = TexelRadiosity(val, g.normal, Albedo(g.material, g.color), opt_.settings.radiosity);
     // Emission is radiance; a Lambertian emitter's radiosity is pi times it.
-    if (first_shot && emissive_[chart]) {
+    if (emission && emissive_[chart]) {
         const Material& mat = scene_.MaterialOf(g.material);
         for (int c = 0; c < 3; ++c)
             db[c] += float(std::numbers::pi) * mat.emission[c];
@@ -360,10 +361,10 @@ Vec3f Solver::SampleUnshot(uint32_t chart, const ChartField& field, const stream
     return db;
 }
 
-double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
-    // BuildEmitter's finest samples alone, in its order: building the whole emitter (its
-    // coarser levels, facets and the near samples, four times the finest) for this sum was
-    // 4.8 % of pepper's bounce pass.
+double Solver::FinestPower(uint32_t chart, bool unshot, bool emission) const {
+    // The finest samples alone: building the whole emitter (its coarser levels, facets and
+    // the near samples, four times the finest) for the unshot power was 4.8 % of pepper's
+    // bounce pass.
     const SolveChart& sc = charts_[chart];
     const GeometryPin pin = sc.geometry.Pin();
     const ChartField& field = fields_[chart];
@@ -374,35 +375,11 @@ double Solver::UnshotPower(uint32_t chart, bool first_shot) const {
     for (uint32_t j = 0; j < n; ++j)
         for (uint32_t i = 0; i < n; ++i) {
             const auto& g = sc.geometry.At(top, i, j);
-            const Vec3f db =
-                g.area > 0 ? SampleUnshot(chart, field, g, i, j, n, first_shot) : Vec3f{};
-            p += double(Luminance(db)) * g.area;
-        }
-    return p;
-}
-
-double Solver::ReflectedPower(uint32_t chart) const {
-    // The chart's reflected power from its whole field so far, at its finest emitter
-    // samples' 2 x 2 Gauss points (as UnshotPower's samples, with the value for the unshot).
-    const SolveChart& sc = charts_[chart];
-    const GeometryPin pin = sc.geometry.Pin();
-    const ChartField& field = fields_[chart];
-    const RegionPin field_pin = field.Pin();
-    const int top = EmitterTop(sc);
-    const uint32_t n = 1u << top;
-    double p = 0;
-    for (uint32_t j = 0; j < n; ++j) {
-        for (uint32_t i = 0; i < n; ++i) {
-            const auto& g = sc.geometry.At(top, i, j);
             if (g.area <= 0)
                 continue;
-            float val[9];
-            TexelMean(field, false, i, j, n, val);
-            const Vec3f b = TexelRadiosity(val, g.normal, Albedo(g.material, g.color),
-                                           opt_.settings.radiosity);
+            const Vec3f b = SampleRadiosity(chart, field, g, i, j, n, unshot, emission);
             p += double(Luminance(b)) * g.area;
         }
-    }
     return p;
 }
 

@@ -238,14 +238,21 @@ private:
     // refine_indirect.cpp: leaves split for the first bounce before the gather starts.
     void RefineForBounces(uint32_t chart, int max_level);
     void BuildEmitter(uint32_t chart, bool first_shot, Emitter* e) const;
-    // The unshot radiosity (and emission on the first shot) of sample (i, j) of an n x n
-    // level whose geometry texel is g (area > 0): an emitter's finest samples.
-    Vec3f SampleUnshot(uint32_t chart, const ChartField& field, const stream::GeometryTexel& g,
-                       uint32_t i, uint32_t j, uint32_t n, bool first_shot) const;
+    // The radiosity of sample (i, j) of an n x n level whose geometry texel is g (area > 0):
+    // of the unshot field or of the whole field so far, with the chart's emission when
+    // `emission` (an emitter's first shot).
+    Vec3f SampleRadiosity(uint32_t chart, const ChartField& field,
+                          const stream::GeometryTexel& g, uint32_t i, uint32_t j, uint32_t n,
+                          bool unshot, bool emission) const;
     void Gather(uint32_t receiver, const std::vector<Emitter>& emitters,
                 const std::vector<std::vector<float>>& links);
-    double UnshotPower(uint32_t chart, bool first_shot) const;
-    double ReflectedPower(uint32_t chart) const;
+    // A chart's power at its finest emitter samples (SampleRadiosity x area, in
+    // BuildEmitter's order): what it has left to shoot, or what it reflects in all.
+    double FinestPower(uint32_t chart, bool unshot, bool emission) const;
+    double UnshotPower(uint32_t chart, bool first_shot) const {
+        return FinestPower(chart, true, first_shot);
+    }
+    double ReflectedPower(uint32_t chart) const { return FinestPower(chart, false, false); }
     // Charts with unshot power of at least chart_stop_fraction x their reflected power.
     std::vector<uint8_t> LaggingCharts(const std::vector<double>& unshot) const;
     float RayOffset(uint32_t chart) const;

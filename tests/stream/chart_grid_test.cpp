@@ -235,18 +235,24 @@ TEST(ChartGrid, ConcaveChartAndAnyResolution) {
     }
 }
 
-TEST(ChartGrid, TriangleSoupWithFlippedAndDegenerateTriangles) {
-    std::mt19937 rng(7);
+// 60 small random triangles, sharing no edge: either orientation, overlapping, every
+// tenth degenerate.
+void TriangleSoup(uint32_t seed, std::vector<Vec2f>* uv, Tris* tris) {
+    std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0.1f, 0.9f), d(-0.08f, 0.08f);
-    std::vector<Vec2f> uv;
-    Tris tris;
     for (uint32_t t = 0; t < 60; ++t) {
         const Vec2f c(u(rng), u(rng));
-        uv.push_back(c + Vec2f(d(rng), d(rng)));
-        uv.push_back(c + Vec2f(d(rng), d(rng)));
-        uv.push_back(t % 10 == 0 ? uv[uv.size() - 1] : c + Vec2f(d(rng), d(rng)));  // degenerate
-        tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});  // either orientation, overlapping
+        uv->push_back(c + Vec2f(d(rng), d(rng)));
+        uv->push_back(c + Vec2f(d(rng), d(rng)));
+        uv->push_back(t % 10 == 0 ? uv->back() : c + Vec2f(d(rng), d(rng)));
+        tris->push_back({3 * t, 3 * t + 1, 3 * t + 2});
     }
+}
+
+TEST(ChartGrid, TriangleSoupWithFlippedAndDegenerateTriangles) {
+    std::vector<Vec2f> uv;
+    Tris tris;
+    TriangleSoup(7, &uv, &tris);
     const ChartGrid grid = BuildChartGrid(uv, tris, 12);
     EXPECT_EQ(grid.outline_tris.size(), tris.size());  // no shared edges: all outline
     CheckAgainstBruteForce(grid, RandomPoints(3000, 8));
@@ -331,17 +337,9 @@ TEST(ChartGrid, VirtualPointsGiveThePlainScansBits) {
     std::vector<Vec2f> notch_uv;
     for (const Vec3f& q : notch.position)
         notch_uv.push_back(Vec2f(0.1f + 0.8f * q.x, 0.15f + 0.7f * q.y));
-    std::mt19937 rng(21);
-    std::uniform_real_distribution<float> at(0.1f, 0.9f), d(-0.08f, 0.08f);
     std::vector<Vec2f> soup_uv;
     Tris soup;
-    for (uint32_t t = 0; t < 60; ++t) {
-        const Vec2f c(at(rng), at(rng));
-        soup_uv.push_back(c + Vec2f(d(rng), d(rng)));
-        soup_uv.push_back(c + Vec2f(d(rng), d(rng)));
-        soup_uv.push_back(t % 10 == 0 ? soup_uv.back() : c + Vec2f(d(rng), d(rng)));
-        soup.push_back({3 * t, 3 * t + 1, 3 * t + 2});
-    }
+    TriangleSoup(21, &soup_uv, &soup);
     const TriMesh cap = GridPatch(17, 3, Cap);
     const ChartParam cap_param = ParameterizeChart(cap);
     ASSERT_TRUE(HasUv(cap_param.status));
