@@ -280,19 +280,24 @@ void DirectLight::Evaluate(std::span<const ReceiverPoint> points, std::span<floa
     // Probes found in the cache take their E and states from it (AddLights) and their
     // visibility points are never read: they are not moved (no origin rays). Unless a light
     // is known: it is evaluated at every point, found probes too.
-    // The records found are handed to AddLights (one lookup per probe, not two).
-    std::vector<uint8_t> found;
-    std::vector<const ProbeCache::Record*> records;
-    const bool none_known =
-        std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
-    if (cache && !with_sky && none_known && probes > 0 && probes < points.size()) {
-        found.assign(points.size(), 0);
-        records.assign(probes, nullptr);
+    // Each probe is looked up once, here; AddLights takes the records found (one per probe
+    // when probes are used, null where not found or without a cache).
+    const bool coherent = probes > 0 && probes < points.size();
+    std::vector<const ProbeCache::Record*> records(coherent ? probes : 0, nullptr);
+    if (cache && coherent) {
         for (size_t q = 0; q < probes; ++q) {
             auto it = cache->map_.find(keys[q]);
             if (it != cache->map_.end())
-                records[q] = &it->second, found[q] = 1;
+                records[q] = &it->second;
         }
+    }
+    std::vector<uint8_t> found;
+    const bool none_known =
+        std::all_of(known.begin(), known.end(), [](uint8_t k) { return k == 0; });
+    if (cache && coherent && !with_sky && none_known) {
+        found.assign(points.size(), 0);
+        for (size_t q = 0; q < probes; ++q)
+            found[q] = records[q] ? 1 : 0;
     }
     const std::vector<ReceiverPoint> on_surface = OnSurface(points, !with_sky, found);
     if (parts & kLights)
@@ -463,31 +468,22 @@ void DirectLight::AddLights(std::span<const ReceiverPoint> points, std::span<flo
                             size_t probes, ProbeCache* cache, std::span<const ProbeKey> keys,
                             std::span<const uint8_t> known,
                             std::span<const uint8_t> inherited,
-                            std::span<const ProbeCache::Record* const> looked_up) const {
+                            std::span<const ProbeCache::Record* const> found) const {
     const bool coherent = probes > 0 && probes < points.size();
     // AddLights' own buffers, per thread as EvaluateLight's (LightScratch): alive across
     // its EvaluateLight calls.
     struct Scratch {
-        std::vector<const ProbeCache::Record*> found;
         std::vector<float> probe_e;
         std::vector<size_t> others, all, uncached;
         std::vector<uint8_t> prior, cls, grid, st;
     };
     ThreadScratch<Scratch> kept;
     Scratch& scratch = *kept;
-    // Probes found in the cache, and records for the others (filled light by light).
-    std::vector<const ProbeCache::Record*>& found = scratch.found;
-    found.assign(coherent ? probes : 0, nullptr);
+    // Probes found in the cache (`found`, from Evaluate), and records for the others
+    // (filled light by light).
+    if (coherent)
+        CHECK_EQ(found.size(), probes);
     std::vector<ProbeCache::Record> fresh(coherent ? probes : 0);
-    if (coherent && cache && !looked_up.empty()) {
-        std::copy(looked_up.begin(), looked_up.end(), found.begin());
-    } else if (coherent && cache) {
-        for (size_t q = 0; q < probes; ++q) {
-            auto it = cache->map_.find(keys[q]);
-            if (it != cache->map_.end())
-                found[q] = &it->second;
-        }
-    }
     size_t state_at = 0;  // this light's offset in a record's states
     std::vector<float>& probe_e = scratch.probe_e;
     // Without probes every point is evaluated on its own; with them, the points after the

@@ -165,11 +165,12 @@ private:
                        std::span<const size_t> which, const uint8_t* prior_cls,
                        const uint8_t* prior_grid, std::span<float> out,
                        std::vector<uint8_t>* cls_out, std::vector<uint8_t>* grid_out) const;
-    // looked_up (empty, or one per probe): the probes' cache records, found by the caller.
+    // found (one per probe when 0 < probes < points): the probes' cache records, null where
+    // not found or without a cache (Evaluate looks them up).
     void AddLights(std::span<const ReceiverPoint> points, std::span<float> out, size_t probes,
                    ProbeCache* cache, std::span<const ProbeKey> keys,
                    std::span<const uint8_t> known, std::span<const uint8_t> inherited,
-                   std::span<const ProbeCache::Record* const> looked_up = {}) const;
+                   std::span<const ProbeCache::Record* const> found) const;
     // Whether light l can reach the point at all (its side, above the point's horizon).
     static bool Faces(const Light& l, const ReceiverPoint& rp);
     void AddSky(std::span<const ReceiverPoint> points, std::span<float> out,
